@@ -1,0 +1,68 @@
+#include "framework/cli/commands.hpp"
+
+#include <cstdio>
+#include <map>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+
+namespace mhb::cli {
+namespace {
+std::vector<std::pair<std::string, CommandSetup>>& commands() {
+    static std::vector<std::pair<std::string, CommandSetup>> list;
+    return list;
+}
+}  // namespace
+
+bool register_command(std::string name, CommandSetup setup) {
+    commands().emplace_back(std::move(name), std::move(setup));
+    return true;
+}
+
+int run(int argc, char** argv) {
+    CLI::App app{"mhbench: benchmark metaheuristic optimisers and identify physical models from measurements"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "mhbench 0.1.0");
+    std::map<CLI::App*, std::function<int()>> actions;
+    for (auto& [name, setup] : commands()) {
+        auto action = setup(app);
+        actions[app.get_subcommand(name)] = std::move(action);
+    }
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::fprintf(stderr, "error: command line: %s\nRun 'mhbench --help' for usage.\n", e.what());
+        return exit_bad_input;
+    }
+    for (const char* kind : {"optimizer", "problem"}) {
+        const auto& conflicts = std::string(kind) == "optimizer" ? OptimizerRegistry::instance().conflicts()
+                                                                  : ProblemRegistry::instance().conflicts();
+        for (const auto& name : conflicts)
+            std::fprintf(stderr, "error: two %s plugins register the name '%s'; rename one of them\n", kind, name.c_str());
+        if (!conflicts.empty()) return exit_bad_input;
+    }
+    for (auto* sub : app.get_subcommands()) {
+        try {
+            return actions.at(sub)();
+        } catch (const InputError& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            return exit_bad_input;
+        } catch (const UnknownPlugin& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            return exit_bad_input;
+        }
+    }
+    return exit_bad_input;
+}
+
+}  // namespace mhb::cli

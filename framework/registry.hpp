@@ -1,0 +1,138 @@
+#pragma once
+// Plugins (optimisers, problems, physical effects) register themselves from their own source file:
+//
+//   namespace { const bool registered = mhb::register_optimizer({
+//       "gwo", "Grey wolf optimizer (Mirjalili 2014)", {ParameterSpec::integer("population", ...)},
+//       [](const ParameterSet& p) { return std::make_unique<Gwo>(p); }}); }
+//
+// The build compiles every .cpp under optimizers/ and problems/ into an object library that is linked
+// whole, so adding a plugin is adding one file; there is no central list to edit.
+#include <algorithm>
+#include <cctype>
+#include <functional>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "framework/optimizer.hpp"
+#include "framework/parameters.hpp"
+#include "framework/problem.hpp"
+
+namespace mhb {
+
+// Thrown for a name that is not registered; the message lists the names that are.
+class UnknownPlugin : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+template <class Factory>
+struct PluginEntry {
+    std::string name;
+    std::string summary;
+    std::vector<ParameterSpec> parameters;
+    Factory create;
+};
+
+template <class Factory>
+class Registry {
+public:
+    using Entry = PluginEntry<Factory>;
+
+    static Registry& instance() {
+        static Registry registry;
+        return registry;
+    }
+
+    // Returns true so that it can initialise a namespace-scope constant. A second entry under an
+    // existing name is kept aside and reported by conflicts(): throwing here would terminate before
+    // main() with no way to say which file is at fault.
+    bool add(Entry entry) {
+        const std::string key = fold(entry.name);
+        if (entries_.count(key)) {
+            conflicts_.push_back(entry.name);
+            return false;
+        }
+        entries_.emplace(key, std::move(entry));
+        return true;
+    }
+
+    // Case-insensitive look-up; nullptr when absent.
+    const Entry* find(const std::string& name) const {
+        auto it = entries_.find(fold(name));
+        return it == entries_.end() ? nullptr : &it->second;
+    }
+
+    const Entry& at(const std::string& name, const std::string& kind) const {
+        if (const Entry* e = find(name)) return *e;
+        std::string known;
+        for (const auto& [key, e] : entries_) known += (known.empty() ? "" : ", ") + e.name;
+        throw UnknownPlugin("unknown " + kind + " '" + name + "'; registered: " + known);
+    }
+
+    // All entries, sorted by name (natural order, so F2 comes before F10).
+    std::vector<const Entry*> entries() const {
+        std::vector<const Entry*> out;
+        for (const auto& [key, e] : entries_) out.push_back(&e);
+        std::sort(out.begin(), out.end(), [](const Entry* a, const Entry* b) { return natural_less(a->name, b->name); });
+        return out;
+    }
+
+    const std::vector<std::string>& conflicts() const { return conflicts_; }
+
+    // Removes an entry (tests register temporary plugins).
+    void remove(const std::string& name) { entries_.erase(fold(name)); }
+
+private:
+    static std::string fold(const std::string& s) {
+        std::string out = s;
+        for (auto& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        return out;
+    }
+    static bool natural_less(const std::string& a, const std::string& b) {
+        std::size_t i = 0, j = 0;
+        while (i < a.size() && j < b.size()) {
+            if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
+                std::size_t i2 = i, j2 = j;
+                while (i2 < a.size() && std::isdigit(static_cast<unsigned char>(a[i2]))) ++i2;
+                while (j2 < b.size() && std::isdigit(static_cast<unsigned char>(b[j2]))) ++j2;
+                const auto na = std::stoull(a.substr(i, i2 - i)), nb = std::stoull(b.substr(j, j2 - j));
+                if (na != nb) return na < nb;
+                i = i2;
+                j = j2;
+                continue;
+            }
+            const auto ca = std::tolower(static_cast<unsigned char>(a[i])), cb = std::tolower(static_cast<unsigned char>(b[j]));
+            if (ca != cb) return ca < cb;
+            ++i;
+            ++j;
+        }
+        return a.size() - i < b.size() - j;
+    }
+    std::map<std::string, Entry> entries_;
+    std::vector<std::string> conflicts_;
+};
+
+using OptimizerFactory = std::function<std::unique_ptr<Optimizer>(const ParameterSet&)>;
+using ProblemFactory = std::function<std::unique_ptr<Problem>(const ParameterSet&, const ProblemContext&)>;
+
+using OptimizerRegistry = Registry<OptimizerFactory>;
+using ProblemRegistry = Registry<ProblemFactory>;
+
+inline bool register_optimizer(PluginEntry<OptimizerFactory> entry) {
+    return OptimizerRegistry::instance().add(std::move(entry));
+}
+inline bool register_problem(PluginEntry<ProblemFactory> entry) {
+    return ProblemRegistry::instance().add(std::move(entry));
+}
+
+// Creates a plugin from its registry entry and user values (ParameterError on bad values).
+std::unique_ptr<Optimizer> make_optimizer(const std::string& name,
+                                          const std::map<std::string, ParameterValue>& values = {});
+std::unique_ptr<Problem> make_problem(const std::string& name,
+                                      const std::map<std::string, ParameterValue>& values = {},
+                                      const ProblemContext& context = {});
+
+}  // namespace mhb

@@ -1,0 +1,57 @@
+#include "framework/trial.hpp"
+
+#include <chrono>
+#include <exception>
+
+#include "framework/input_error.hpp"
+
+namespace mhb {
+
+TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialSetup& setup) {
+    TrialRecord rec;
+    rec.seed = setup.seed;
+    const auto start = std::chrono::steady_clock::now();
+    Evaluator evaluator(problem, setup.budget);
+    Rng rng(setup.seed);
+
+    auto record = [&] {
+        rec.trace_evaluations.push_back(evaluator.evaluations());
+        rec.trace_best.push_back(evaluator.best_fitness());
+        if (setup.record_positions) rec.trace_position.push_back(evaluator.best_position());
+    };
+    const auto reserve = static_cast<std::size_t>(setup.budget.max_iterations > 0 ? setup.budget.max_iterations + 1 : 256);
+    rec.trace_evaluations.reserve(reserve);
+    rec.trace_best.reserve(reserve);
+
+    try {
+        optimizer.initialize(evaluator, rng);
+        record();
+        Progress progress;
+        progress.budget = setup.budget;
+        while (!evaluator.exhausted() &&
+               (setup.budget.max_iterations <= 0 || rec.iterations < setup.budget.max_iterations)) {
+            progress.iteration = rec.iterations + 1;
+            progress.evaluations = evaluator.evaluations();
+            const auto before = evaluator.evaluations();
+            optimizer.iterate(progress, evaluator, rng);
+            ++rec.iterations;
+            record();
+            // An optimiser that stops evaluating would loop forever under an evaluation-only budget.
+            if (setup.budget.max_iterations <= 0 && evaluator.evaluations() == before)
+                throw PluginFault("optimizer iteration made no evaluation under an evaluation-only budget");
+        }
+    } catch (const std::exception& e) {
+        rec.ok = false;
+        rec.error = e.what();
+    } catch (...) {
+        rec.ok = false;
+        rec.error = "unknown exception";
+    }
+    rec.best_fitness = evaluator.best_fitness();
+    rec.best_position = evaluator.best_position();
+    rec.evaluations = evaluator.evaluations();
+    rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return rec;
+}
+
+}  // namespace mhb

@@ -1,0 +1,42 @@
+#pragma once
+// One trial: one optimiser on one problem with one seed, run to its budget, with the framework's own
+// record of the best point and its convergence.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "framework/optimizer.hpp"
+
+namespace mhb {
+
+struct TrialRecord {
+    std::string optimizer;  // variant label, e.g. "isoa(cuckoo=false)"
+    std::string problem;    // problem label, e.g. "F1" or "bbob_f3(dimension=10)"
+    std::int64_t trial = 0;
+    std::uint64_t seed = 0;
+    bool ok = true;
+    std::string error;      // why the trial failed, when !ok
+
+    double best_fitness = 0.0;
+    Vector best_position;
+    std::int64_t evaluations = 0;
+    std::int64_t iterations = 0;
+    double seconds = 0.0;
+
+    // Entry k is the state after iteration k (entry 0: after initialisation).
+    std::vector<std::int64_t> trace_evaluations;
+    std::vector<double> trace_best;
+    std::vector<Vector> trace_position;  // best-so-far position; filled when record_positions
+};
+
+struct TrialSetup {
+    Budget budget;
+    std::uint64_t seed = 0;
+    bool record_positions = false;
+};
+
+// Runs the trial. Exceptions thrown by the plugins (including PluginFault from the evaluator) fail
+// this trial only: they are caught and recorded in `error`.
+TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialSetup& setup);
+
+}  // namespace mhb

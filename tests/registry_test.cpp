@@ -1,0 +1,35 @@
+#include <catch2/catch.hpp>
+
+#include "framework/registry.hpp"
+#include "tests/sphere_fixture.hpp"
+
+using namespace mhb;
+
+TEST_CASE("plugins found case-insensitively; unknown names list what exists", "[registry]") {
+    REQUIRE(OptimizerRegistry::instance().find("random_search") != nullptr);
+    REQUIRE(OptimizerRegistry::instance().find("RANDOM_SEARCH") != nullptr);
+    try {
+        make_optimizer("no_such_optimizer");
+        FAIL("accepted an unknown optimizer");
+    } catch (const UnknownPlugin& e) {
+        REQUIRE_THAT(e.what(), Catch::Contains("random_search"));
+    }
+    REQUIRE(OptimizerRegistry::instance().conflicts().empty());
+    REQUIRE(ProblemRegistry::instance().conflicts().empty());
+}
+
+TEST_CASE("a second registration under a taken name is reported, not silently replaced", "[registry]") {
+    Registry<int> local;
+    REQUIRE(local.add({"alpha", "first", {}, 1}));
+    REQUIRE_FALSE(local.add({"Alpha", "second", {}, 2}));
+    REQUIRE(local.find("alpha")->create == 1);
+    REQUIRE(local.conflicts() == std::vector<std::string>{"Alpha"});
+}
+
+TEST_CASE("registry lists names in natural order", "[registry]") {
+    Registry<int> local;
+    for (const char* n : {"F10", "F2", "F1", "bbob_f3"}) local.add({n, "", {}, 0});
+    std::vector<std::string> names;
+    for (const auto* e : local.entries()) names.push_back(e->name);
+    REQUIRE(names == std::vector<std::string>{"bbob_f3", "F1", "F2", "F10"});
+}
