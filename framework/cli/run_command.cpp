@@ -1,0 +1,94 @@
+// `mhbench run FILE [--threads N] [--out DIR] [--resume]` and `mhbench table DIR`.
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "framework/cli/commands.hpp"
+#include "framework/experiment_runner.hpp"
+#include "framework/plots.hpp"
+#include "framework/report_tables.hpp"
+
+namespace mhb::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Tables and plots from whatever the directory holds; returns the Markdown report.
+std::string publish(const fs::path& directory, bool plots, bool quiet) {
+    const auto info = read_experiment_info(directory);
+    auto loaded = read_results(directory / "results.jsonl");
+    for (const auto& note : loaded.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
+    write_tables(directory, info, loaded.records);
+    std::vector<fs::path> images;
+    if (plots && info.plots) {
+        const auto outcome = write_plots(directory, info, loaded.records);
+        for (const auto& note : outcome.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
+        images = outcome.images;
+    }
+    const std::string report = markdown_report(info, loaded.records);
+    if (!quiet) {
+        fmt::print("{}\n", report);
+        fmt::print("Wrote {}/table.md, table.csv", directory.string());
+        if (!images.empty()) fmt::print(" and {} plots (PNG + SVG)", images.size());
+        fmt::print(".\n");
+    }
+    return report;
+}
+
+const bool run_registered = register_command("run", [](CLI::App& app) {
+    auto* cmd = app.add_subcommand("run", "Run an experiment described in a TOML file; write results, tables and plots");
+    struct Args {
+        std::string file, out;
+        int threads = 0;
+        bool resume = false, no_plots = false, quiet = false;
+    };
+    auto a = std::make_shared<Args>();
+    cmd->add_option("FILE", a->file, "experiment TOML file (see experiments/ and docs/config-reference.md)")->required();
+    cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+    cmd->add_option("--out", a->out, "output directory (default: the config's `output`)");
+    cmd->add_flag("--resume", a->resume, "keep the trials already in the output's results.jsonl and run only the missing ones");
+    cmd->add_flag("--no-plots", a->no_plots, "write tables only");
+    cmd->add_flag("--quiet", a->quiet, "do not print the tables");
+    return std::function<int()>([a] {
+        const auto spec = load_experiment(a->file);
+        RunOptions options;
+        options.threads = a->threads;
+        options.resume = a->resume;
+        if (!a->out.empty()) options.output = fs::path(a->out);
+        if (!a->quiet)
+            std::fprintf(stderr, "Running %s: %zu optimizer(s) x %zu problem(s) x %lld trials\n", spec.name.c_str(),
+                         spec.optimizers.size(), spec.problems.size(), static_cast<long long>(spec.trials));
+        const auto summary = run_experiment(spec, options);
+        for (const auto& note : summary.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
+        publish(summary.output, !a->no_plots, a->quiet);
+        std::fprintf(stderr, "%zu trials run, %zu skipped (already done), %zu failed, in %.3f s wall time.\n", summary.ran,
+                     summary.skipped, summary.failed, summary.seconds);
+        if (summary.failed > 0) {
+            std::fprintf(stderr, "error: %zu trial(s) failed; their reasons are in %s/results.jsonl. First:\n", summary.failed,
+                         summary.output.string().c_str());
+            for (const auto& f : summary.failures) std::fprintf(stderr, "  %s\n", f.c_str());
+            return exit_bad_input;
+        }
+        return exit_ok;
+    });
+});
+
+const bool table_registered = register_command("table", [](CLI::App& app) {
+    auto* cmd = app.add_subcommand("table", "Remake the tables (and plots) of a results directory");
+    struct Args {
+        std::string dir;
+        bool no_plots = false;
+    };
+    auto a = std::make_shared<Args>();
+    cmd->add_option("DIR", a->dir, "a directory written by `mhbench run`")->required();
+    cmd->add_flag("--no-plots", a->no_plots, "write tables only");
+    return std::function<int()>([a] {
+        publish(a->dir, !a->no_plots, false);
+        return exit_ok;
+    });
+});
+
+}  // namespace
+}  // namespace mhb::cli

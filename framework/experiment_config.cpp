@@ -1,0 +1,256 @@
+#include "framework/experiment_config.hpp"
+
+#include <set>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+
+namespace mhb {
+namespace {
+
+namespace fs = std::filesystem;
+
+long line_of(const toml::node& node) { return static_cast<long>(node.source().begin.line); }
+
+class ConfigReader {
+public:
+    explicit ConfigReader(fs::path file) : file_(std::move(file)) {}
+
+    [[noreturn]] void fail(long line, const std::string& field, const std::string& message) const {
+        throw InputError(file_.string(), line, field, message);
+    }
+
+    ParameterValue scalar(const toml::node& node, const std::string& field) const {
+        if (auto v = node.as_boolean()) return v->get();
+        if (auto v = node.as_integer()) return std::int64_t{v->get()};
+        if (auto v = node.as_floating_point()) return v->get();
+        if (auto v = node.as_string()) return v->get();
+        fail(line_of(node), field, "expects a boolean, number or string");
+    }
+
+    std::int64_t integer(const toml::table& t, const char* key, const std::string& field, std::int64_t lo,
+                         std::int64_t fallback, long table_line, bool required) const {
+        const toml::node* n = t.get(key);
+        if (!n) {
+            if (required) fail(table_line, field, "is required");
+            return fallback;
+        }
+        auto v = n->as_integer();
+        if (!v) fail(line_of(*n), field, "expects an integer");
+        if (v->get() < lo) fail(line_of(*n), field, fmt::format("must be >= {} (got {})", lo, v->get()));
+        return v->get();
+    }
+
+    std::string text(const toml::table& t, const char* key, const std::string& field, long table_line,
+                     bool required, std::string fallback = {}) const {
+        const toml::node* n = t.get(key);
+        if (!n) {
+            if (required) fail(table_line, field, "is required");
+            return fallback;
+        }
+        auto v = n->as_string();
+        if (!v) fail(line_of(*n), field, "expects a string");
+        return v->get();
+    }
+
+    // [[optimizer]] or [[problem]] entries, each expanded into its grid of variants.
+    template <class RegistryT>
+    std::vector<PluginVariant> variants(const toml::table& root, const char* key, const char* kind,
+                                        const RegistryT& registry) const {
+        std::vector<PluginVariant> out;
+        const toml::node* node = root.get(key);
+        if (!node) fail(0, key, fmt::format("at least one [[{}]] table is required", key));
+        const toml::array* list = node->as_array();
+        if (!list) fail(line_of(*node), key, fmt::format("must be an array of tables, written [[{}]]", key));
+        std::size_t index = 0;
+        for (const auto& element : *list) {
+            const auto* table = element.as_table();
+            const std::string where = fmt::format("{}[{}]", key, index++);
+            if (!table) fail(line_of(element), where, "must be a table");
+            const long line = line_of(element);
+            const std::string name = text(*table, "name", where + ".name", line, true);
+            const auto& entry = registry.at(name, kind);  // UnknownPlugin is rethrown below with the line
+            const std::string label = text(*table, "label", where + ".label", line, false);
+
+            std::vector<std::pair<std::string, std::vector<ParameterValue>>> axes;
+            std::map<std::string, long> key_lines;
+            std::vector<std::string> grid_keys;
+            for (const auto& [k, v] : *table) {
+                const std::string param(k.str());
+                if (param == "name" || param == "label") continue;
+                const std::string field = where + "." + param;
+                key_lines[param] = line_of(v);
+                std::vector<ParameterValue> values;
+                if (const auto* arr = v.as_array()) {
+                    if (arr->empty()) fail(line_of(v), field, "an empty list gives no variant");
+                    for (const auto& item : *arr) values.push_back(scalar(item, field));
+                    grid_keys.push_back(param);
+                } else {
+                    values.push_back(scalar(v, field));
+                }
+                axes.emplace_back(param, std::move(values));
+            }
+            for (auto& given : expand_grid(axes)) {
+                try {
+                    ParameterSet checked(entry.parameters, given);
+                    (void)checked;
+                } catch (const ParameterError& e) {
+                    auto it = key_lines.find(e.field());
+                    fail(it != key_lines.end() ? it->second : line, where + "." + e.field(), e.message());
+                }
+                PluginVariant variant;
+                variant.name = entry.name;
+                variant.line = line;
+                std::string suffix;
+                for (const auto& g : grid_keys) suffix += (suffix.empty() ? "" : ",") + g + "=" + to_string(given.at(g));
+                const std::string base = label.empty() ? entry.name : label;
+                if (label.empty() && grid_keys.empty()) {
+                    // Without a label, non-default parameters name the variant so two entries of
+                    // one optimiser with different settings stay apart.
+                    std::string params;
+                    for (const auto& [k, v] : given) params += (params.empty() ? "" : ",") + k + "=" + to_string(v);
+                    variant.label = params.empty() ? base : base + "(" + params + ")";
+                } else {
+                    variant.label = suffix.empty() ? base : base + "(" + suffix + ")";
+                }
+                variant.values = std::move(given);
+                out.push_back(std::move(variant));
+            }
+        }
+        std::set<std::string> seen;
+        for (const auto& v : out)
+            if (!seen.insert(v.label).second)
+                fail(v.line, std::string(key) + ".label",
+                     fmt::format("two {} variants are both labelled '{}'; give them distinct labels", kind, v.label));
+        return out;
+    }
+
+    fs::path file_;
+};
+
+}  // namespace
+
+std::vector<std::map<std::string, ParameterValue>> expand_grid(
+    const std::vector<std::pair<std::string, std::vector<ParameterValue>>>& axes) {
+    std::vector<std::map<std::string, ParameterValue>> out{{}};
+    for (const auto& [name, values] : axes) {
+        std::vector<std::map<std::string, ParameterValue>> next;
+        for (const auto& partial : out)
+            for (const auto& v : values) {
+                auto m = partial;
+                m[name] = v;
+                next.push_back(std::move(m));
+            }
+        out = std::move(next);
+    }
+    return out;
+}
+
+ExperimentSpec load_experiment(const fs::path& file) {
+    ExperimentSpec spec;
+    spec.file = file;
+    ConfigReader reader(file);
+    if (!fs::exists(file)) reader.fail(0, "", "no such file");
+    toml::table root;
+    try {
+        root = toml::parse_file(file.string());
+    } catch (const toml::parse_error& e) {
+        reader.fail(static_cast<long>(e.source().begin.line), "", std::string("TOML syntax: ") + std::string(e.description()));
+    }
+    static const std::set<std::string> known{"name",  "description", "trials",   "seed",     "output",
+                                             "budget", "analysis",    "optimizer", "problem", "plots"};
+    for (const auto& [k, v] : root)
+        if (!known.count(std::string(k.str())))
+            reader.fail(line_of(v), std::string(k.str()),
+                        "unknown key; expected one of name, description, trials, seed, output, plots, "
+                        "[budget], [analysis], [[optimizer]], [[problem]]");
+
+    spec.name = reader.text(root, "name", "name", 1, false, file.stem().string());
+    spec.description = reader.text(root, "description", "description", 1, false);
+    spec.trials = reader.integer(root, "trials", "trials", 1, 0, 1, true);
+    spec.seed = static_cast<std::uint64_t>(reader.integer(root, "seed", "seed", 0, 0, 1, true));
+    const fs::path base = fs::absolute(file).parent_path();
+    spec.output = base / reader.text(root, "output", "output", 1, false, "../results/" + spec.name);
+    spec.output = spec.output.lexically_normal();
+    if (const auto* p = root.get("plots")) {
+        auto b = p->as_boolean();
+        if (!b) reader.fail(line_of(*p), "plots", "expects true or false");
+        spec.plots = b->get();
+    }
+
+    const toml::node* budget = root.get("budget");
+    if (!budget || !budget->as_table()) reader.fail(budget ? line_of(*budget) : 0, "budget",
+                                                    "a [budget] table with iterations and/or evaluations is required");
+    const auto& bt = *budget->as_table();
+    for (const auto& [k, v] : bt)
+        if (k.str() != "iterations" && k.str() != "evaluations")
+            reader.fail(line_of(v), "budget." + std::string(k.str()), "unknown key; expected iterations or evaluations");
+    spec.budget.max_iterations = reader.integer(bt, "iterations", "budget.iterations", 1, 0, line_of(*budget), false);
+    spec.budget.max_evaluations = reader.integer(bt, "evaluations", "budget.evaluations", 1, 0, line_of(*budget), false);
+    if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0)
+        reader.fail(line_of(*budget), "budget", "set iterations, evaluations or both");
+
+    try {
+        spec.optimizers = reader.variants(root, "optimizer", "optimizer", OptimizerRegistry::instance());
+        spec.problems = reader.variants(root, "problem", "problem", ProblemRegistry::instance());
+    } catch (const UnknownPlugin& e) {
+        // Find the entry that named it, for the line number.
+        for (const char* key : {"optimizer", "problem"}) {
+            if (const auto* arr = root.get(key) ? root.get(key)->as_array() : nullptr) {
+                std::size_t i = 0;
+                for (const auto& el : *arr) {
+                    const auto* t = el.as_table();
+                    const auto* n = t ? t->get("name") : nullptr;
+                    const auto* s = n ? n->as_string() : nullptr;
+                    const bool known_name = s && (std::string(key) == "optimizer"
+                                                      ? OptimizerRegistry::instance().find(s->get()) != nullptr
+                                                      : ProblemRegistry::instance().find(s->get()) != nullptr);
+                    if (s && !known_name) reader.fail(line_of(*n), fmt::format("{}[{}].name", key, i), e.what());
+                    ++i;
+                }
+            }
+        }
+        reader.fail(0, "", e.what());
+    }
+
+    spec.baseline = spec.optimizers.front().label;
+    spec.references.clear();
+    if (const auto* analysis = root.get("analysis")) {
+        const auto* at = analysis->as_table();
+        if (!at) reader.fail(line_of(*analysis), "analysis", "must be a table");
+        auto known_label = [&](const std::string& label, const toml::node& where, const std::string& field) {
+            for (const auto& o : spec.optimizers)
+                if (o.label == label) return;
+            std::string labels;
+            for (const auto& o : spec.optimizers) labels += (labels.empty() ? "" : ", ") + o.label;
+            reader.fail(line_of(where), field, fmt::format("'{}' is not an optimizer label here; labels: {}", label, labels));
+        };
+        for (const auto& [k, v] : *at) {
+            const std::string key(k.str());
+            if (key == "baseline") {
+                auto s = v.as_string();
+                if (!s) reader.fail(line_of(v), "analysis.baseline", "expects a string");
+                known_label(s->get(), v, "analysis.baseline");
+                spec.baseline = s->get();
+            } else if (key == "references") {
+                auto arr = v.as_array();
+                if (!arr) reader.fail(line_of(v), "analysis.references", "expects a list of optimizer labels");
+                for (const auto& item : *arr) {
+                    auto s = item.as_string();
+                    if (!s) reader.fail(line_of(item), "analysis.references", "expects strings");
+                    known_label(s->get(), item, "analysis.references");
+                    spec.references.push_back(s->get());
+                }
+            } else {
+                reader.fail(line_of(v), "analysis." + key, "unknown key; expected baseline or references");
+            }
+        }
+    }
+    if (spec.references.empty()) spec.references.push_back(spec.baseline);
+    return spec;
+}
+
+}  // namespace mhb

@@ -1,0 +1,46 @@
+#pragma once
+// Experiments are TOML files (see docs/config-reference.md). Loading one resolves and validates
+// everything before a trial runs: every name is registered, every parameter value fits its
+// declaration, and lists of values expand into a grid of variants.
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "framework/optimizer.hpp"
+#include "framework/parameters.hpp"
+
+namespace mhb {
+
+// One optimiser or problem as it will run: a registered name plus parameter values.
+struct PluginVariant {
+    std::string label;  // unique within the experiment; used in tables, plots and seeds
+    std::string name;   // registry name
+    std::map<std::string, ParameterValue> values;
+    long line = 0;      // where it was declared in the config
+};
+
+struct ExperimentSpec {
+    std::filesystem::path file;       // the TOML file
+    std::string name;
+    std::string description;
+    std::int64_t trials = 0;
+    std::uint64_t seed = 0;
+    Budget budget;
+    std::filesystem::path output;     // resolved: relative paths are relative to the config file
+    std::vector<PluginVariant> optimizers;
+    std::vector<PluginVariant> problems;
+    std::string baseline;             // optimiser label the others are tested against
+    std::vector<std::string> references;  // labels for pairwise columns (default: the baseline)
+    bool plots = true;
+};
+
+// Throws InputError (file, line, field) for anything malformed, unknown or out of range.
+ExperimentSpec load_experiment(const std::filesystem::path& file);
+
+// Expands list-valued entries into the cartesian product, in declaration order.
+std::vector<std::map<std::string, ParameterValue>> expand_grid(
+    const std::vector<std::pair<std::string, std::vector<ParameterValue>>>& axes);
+
+}  // namespace mhb

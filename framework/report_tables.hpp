@@ -1,0 +1,29 @@
+#pragma once
+// Result tables (Markdown for people, CSV for programs) from an experiment's trial records.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "framework/results_store.hpp"
+
+namespace mhb {
+
+// Trials grouped per (problem, optimiser), in the experiment's declaration order.
+struct TrialGroups {
+    // groups[p][o] holds the successful trials; failed[p][o] counts the failed ones.
+    std::vector<std::vector<std::vector<const TrialRecord*>>> ok;
+    std::vector<std::vector<std::size_t>> failed;
+};
+TrialGroups group_trials(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
+
+// The value tables and plots use for a trial: final fitness minus the known optimum when there is one.
+double final_error(const ProblemInfo& problem, const TrialRecord& record);
+
+std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
+std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
+
+// Writes table.md and table.csv into `directory`.
+void write_tables(const std::filesystem::path& directory, const ExperimentInfo& info,
+                  const std::vector<TrialRecord>& records);
+
+}  // namespace mhb

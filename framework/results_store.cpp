@@ -1,0 +1,233 @@
+#include "framework/results_store.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "framework/input_error.hpp"
+
+namespace mhb {
+namespace {
+
+using nlohmann::json;
+
+// JSON has no infinity or NaN; they are written as strings so that nothing is lost.
+json number(double v) {
+    if (std::isfinite(v)) return v;
+    if (std::isnan(v)) return "nan";
+    return v > 0 ? "inf" : "-inf";
+}
+double number_from(const json& j) {
+    if (j.is_number()) return j.get<double>();
+    const auto s = j.get<std::string>();
+    if (s == "inf") return std::numeric_limits<double>::infinity();
+    if (s == "-inf") return -std::numeric_limits<double>::infinity();
+    return std::nan("");
+}
+json vector_json(const Vector& v) {
+    json a = json::array();
+    for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(number(v[i]));
+    return a;
+}
+Vector vector_from(const json& j) {
+    Vector v(static_cast<Eigen::Index>(j.size()));
+    for (std::size_t i = 0; i < j.size(); ++i) v[static_cast<Eigen::Index>(i)] = number_from(j[i]);
+    return v;
+}
+json value_json(const ParameterValue& v) {
+    return std::visit([](const auto& x) -> json { return x; }, v);
+}
+ParameterValue value_from(const json& j) {
+    if (j.is_boolean()) return j.get<bool>();
+    if (j.is_number_integer()) return j.get<std::int64_t>();
+    if (j.is_number()) return j.get<double>();
+    return j.get<std::string>();
+}
+json variant_json(const PluginVariant& v) {
+    json params = json::object();
+    for (const auto& [k, x] : v.values) params[k] = value_json(x);
+    return {{"label", v.label}, {"name", v.name}, {"parameters", params}};
+}
+PluginVariant variant_from(const json& j) {
+    PluginVariant v;
+    v.label = j.at("label");
+    v.name = j.at("name");
+    for (const auto& [k, x] : j.at("parameters").items()) v.values[k] = value_from(x);
+    return v;
+}
+template <class T>
+json optional_json(const std::optional<T>& o) {
+    if (!o) return nullptr;
+    if constexpr (std::is_same_v<T, Vector>) return vector_json(*o);
+    else return number(*o);
+}
+
+}  // namespace
+
+json to_json(const TrialRecord& r) {
+    json j{{"optimizer", r.optimizer},
+           {"problem", r.problem},
+           {"trial", r.trial},
+           {"seed", r.seed},
+           {"status", r.ok ? "ok" : "failed"},
+           {"best_fitness", number(r.best_fitness)},
+           {"best_position", vector_json(r.best_position)},
+           {"evaluations", r.evaluations},
+           {"iterations", r.iterations},
+           {"seconds", r.seconds}};
+    if (!r.ok) j["error"] = r.error;
+    json trace{{"evaluations", r.trace_evaluations}, {"best", json::array()}};
+    for (double b : r.trace_best) trace["best"].push_back(number(b));
+    if (!r.trace_position.empty()) {
+        json positions = json::array();
+        for (const auto& p : r.trace_position) positions.push_back(vector_json(p));
+        trace["position"] = std::move(positions);
+    }
+    j["trace"] = std::move(trace);
+    return j;
+}
+
+TrialRecord trial_from_json(const json& j) {
+    TrialRecord r;
+    r.optimizer = j.at("optimizer");
+    r.problem = j.at("problem");
+    r.trial = j.at("trial");
+    r.seed = j.at("seed");
+    r.ok = j.at("status") == "ok";
+    if (j.contains("error")) r.error = j["error"];
+    r.best_fitness = number_from(j.at("best_fitness"));
+    r.best_position = vector_from(j.at("best_position"));
+    r.evaluations = j.at("evaluations");
+    r.iterations = j.at("iterations");
+    r.seconds = j.at("seconds");
+    const auto& t = j.at("trace");
+    r.trace_evaluations = t.at("evaluations").get<std::vector<std::int64_t>>();
+    for (const auto& b : t.at("best")) r.trace_best.push_back(number_from(b));
+    if (t.contains("position"))
+        for (const auto& p : t["position"]) r.trace_position.push_back(vector_from(p));
+    return r;
+}
+
+json to_json(const ExperimentInfo& info) {
+    json optimizers = json::array(), problems = json::array();
+    for (const auto& o : info.optimizers) optimizers.push_back(variant_json(o));
+    for (const auto& p : info.problems) {
+        problems.push_back({{"label", p.label},
+                            {"name", p.name},
+                            {"dimension", p.dimension},
+                            {"parameter_names", p.parameter_names},
+                            {"named_parameters", p.named_parameters},
+                            {"description", p.description},
+                            {"optimum_value", optional_json(p.truth.optimum_value)},
+                            {"true_parameters", optional_json(p.truth.true_parameters)},
+                            {"reference_solution", optional_json(p.truth.reference_solution)},
+                            {"reference_fitness", optional_json(p.truth.reference_fitness)},
+                            {"reference_label", p.truth.reference_label}});
+    }
+    return {{"name", info.name},
+            {"description", info.description},
+            {"config_file", info.config_file},
+            {"trials", info.trials},
+            {"seed", info.seed},
+            {"budget", {{"iterations", info.budget.max_iterations}, {"evaluations", info.budget.max_evaluations}}},
+            {"optimizers", optimizers},
+            {"problems", problems},
+            {"baseline", info.baseline},
+            {"references", info.references},
+            {"plots", info.plots}};
+}
+
+ExperimentInfo experiment_from_json(const json& j) {
+    ExperimentInfo info;
+    info.name = j.at("name");
+    info.description = j.value("description", "");
+    info.config_file = j.value("config_file", "");
+    info.trials = j.at("trials");
+    info.seed = j.at("seed");
+    info.budget.max_iterations = j.at("budget").at("iterations");
+    info.budget.max_evaluations = j.at("budget").at("evaluations");
+    for (const auto& o : j.at("optimizers")) info.optimizers.push_back(variant_from(o));
+    for (const auto& p : j.at("problems")) {
+        ProblemInfo pi;
+        pi.label = p.at("label");
+        pi.name = p.at("name");
+        pi.dimension = p.at("dimension");
+        pi.parameter_names = p.at("parameter_names").get<std::vector<std::string>>();
+        pi.named_parameters = p.value("named_parameters", false);
+        pi.description = p.value("description", "");
+        if (!p.at("optimum_value").is_null()) pi.truth.optimum_value = number_from(p["optimum_value"]);
+        if (!p.at("true_parameters").is_null()) pi.truth.true_parameters = vector_from(p["true_parameters"]);
+        if (!p.at("reference_solution").is_null()) pi.truth.reference_solution = vector_from(p["reference_solution"]);
+        if (!p.at("reference_fitness").is_null()) pi.truth.reference_fitness = number_from(p["reference_fitness"]);
+        pi.truth.reference_label = p.value("reference_label", "");
+        info.problems.push_back(std::move(pi));
+    }
+    info.baseline = j.at("baseline");
+    info.references = j.at("references").get<std::vector<std::string>>();
+    info.plots = j.value("plots", true);
+    return info;
+}
+
+ResultsWriter::ResultsWriter(const std::filesystem::path& path) : path_(path) {
+    std::error_code ec;
+    std::filesystem::create_directories(path.parent_path(), ec);
+    out_.open(path, std::ios::app);
+    if (!out_)
+        throw InputError(path.parent_path().string(), 0, "output",
+                         "cannot write here (" + (ec ? ec.message() : std::string("permission denied or not a directory")) +
+                             "); choose another directory with --out");
+}
+
+void ResultsWriter::append(const TrialRecord& record) {
+    const std::string line = to_json(record).dump() + "\n";
+    std::lock_guard lock(mutex_);
+    out_ << line;
+    out_.flush();
+    if (!out_) throw std::runtime_error("writing " + path_.string() + " failed (disk full?)");
+}
+
+LoadedResults read_results(const std::filesystem::path& path) {
+    LoadedResults out;
+    std::ifstream in(path);
+    if (!in) return out;
+    std::string line;
+    long number = 0;
+    std::vector<std::pair<long, std::string>> lines;
+    while (std::getline(in, line)) {
+        ++number;
+        if (!line.empty()) lines.emplace_back(number, line);
+    }
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        try {
+            out.records.push_back(trial_from_json(json::parse(lines[i].second)));
+        } catch (const std::exception& e) {
+            if (i + 1 == lines.size()) {
+                out.notes.push_back(fmt::format("{}:{}: ignored an incomplete last line (an interrupted write)",
+                                                path.string(), lines[i].first));
+                continue;
+            }
+            throw InputError(path.string(), lines[i].first, "", std::string("not a trial record: ") + e.what());
+        }
+    }
+    return out;
+}
+
+ExperimentInfo read_experiment_info(const std::filesystem::path& directory) {
+    const auto path = directory / "experiment.json";
+    std::ifstream in(path);
+    if (!in) throw InputError(path.string(), 0, "", "missing: is this an mhbench results directory?");
+    try {
+        return experiment_from_json(json::parse(in));
+    } catch (const json::exception& e) {
+        throw InputError(path.string(), 0, "", std::string("unreadable: ") + e.what());
+    }
+}
+
+void write_experiment_info(const std::filesystem::path& directory, const ExperimentInfo& info) {
+    const auto path = directory / "experiment.json";
+    std::ofstream out(path);
+    out << to_json(info).dump(2) << "\n";
+    if (!out) throw InputError(directory.string(), 0, "output", "cannot write experiment.json here");
+}
+
+}  // namespace mhb

@@ -1,0 +1,72 @@
+#pragma once
+// Trial results as JSON Lines: one finished trial per line, appended and flushed as soon as it
+// finishes, so an interrupted run keeps everything that finished. An experiment.json beside it
+// describes the experiment, so tables can be remade from the directory alone.
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "framework/experiment_config.hpp"
+#include "framework/problem.hpp"
+#include "framework/trial.hpp"
+
+namespace mhb {
+
+// What the tables need to know about a problem beyond its trials.
+struct ProblemInfo {
+    std::string label;
+    std::string name;
+    int dimension = 0;
+    std::vector<std::string> parameter_names;
+    bool named_parameters = false;
+    KnownTruth truth;
+    std::string description;
+};
+
+struct ExperimentInfo {
+    std::string name;
+    std::string description;
+    std::string config_file;
+    std::int64_t trials = 0;
+    std::uint64_t seed = 0;
+    Budget budget;
+    std::vector<PluginVariant> optimizers;
+    std::vector<ProblemInfo> problems;
+    std::string baseline;
+    std::vector<std::string> references;
+    bool plots = true;
+};
+
+nlohmann::json to_json(const TrialRecord& record);
+TrialRecord trial_from_json(const nlohmann::json& j);
+nlohmann::json to_json(const ExperimentInfo& info);
+ExperimentInfo experiment_from_json(const nlohmann::json& j);
+
+class ResultsWriter {
+public:
+    // Opens `path` for appending; InputError when the directory is not writable.
+    explicit ResultsWriter(const std::filesystem::path& path);
+    void append(const TrialRecord& record);  // thread-safe; flushed before it returns
+
+private:
+    std::filesystem::path path_;
+    std::ofstream out_;
+    std::mutex mutex_;
+};
+
+struct LoadedResults {
+    std::vector<TrialRecord> records;
+    std::vector<std::string> notes;  // e.g. a truncated last line from an interrupted run
+};
+// Reads a results file; an unreadable line other than a truncated last one is an InputError.
+LoadedResults read_results(const std::filesystem::path& path);
+
+ExperimentInfo read_experiment_info(const std::filesystem::path& directory);
+void write_experiment_info(const std::filesystem::path& directory, const ExperimentInfo& info);
+
+}  // namespace mhb

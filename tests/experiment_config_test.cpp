@@ -1,0 +1,100 @@
+#include <catch2/catch.hpp>
+
+#include "framework/experiment_config.hpp"
+#include "framework/input_error.hpp"
+#include "tests/temporary_directory.hpp"
+
+using namespace mhb;
+
+namespace {
+const char* valid = R"(name = "t"
+trials = 3
+seed = 11
+
+[budget]
+iterations = 10
+
+[[optimizer]]
+name = "random_search"
+batch = [5, 10]
+
+[[optimizer]]
+name = "random_search"
+label = "RS"
+
+[[problem]]
+name = "test_sphere"
+dimension = [2, 3]
+shift = 0.5
+
+[analysis]
+baseline = "RS"
+)";
+
+// Loads `text` and returns the InputError message, or "" when it loads.
+std::string error_of(const std::string& text) {
+    testing::TemporaryDirectory dir;
+    const auto file = dir.write("exp.toml", text);
+    try {
+        load_experiment(file);
+        return "";
+    } catch (const InputError& e) {
+        return e.what();
+    }
+}
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+    const auto pos = text.find(from);
+    REQUIRE(pos != std::string::npos);
+    return text.replace(pos, from.size(), to);
+}
+}  // namespace
+
+TEST_CASE("a valid experiment expands its grids and resolves paths", "[experiment_config]") {
+    testing::TemporaryDirectory dir;
+    const auto spec = load_experiment(dir.write("exp.toml", valid));
+    REQUIRE(spec.trials == 3);
+    REQUIRE(spec.seed == 11);
+    REQUIRE(spec.budget.max_iterations == 10);
+    REQUIRE(spec.optimizers.size() == 3);
+    REQUIRE(spec.optimizers[0].label == "random_search(batch=5)");
+    REQUIRE(spec.optimizers[1].label == "random_search(batch=10)");
+    REQUIRE(spec.optimizers[2].label == "RS");
+    REQUIRE(spec.problems.size() == 2);
+    REQUIRE(spec.problems[1].label == "test_sphere(dimension=3)");
+    REQUIRE(std::get<double>(spec.problems[1].values.at("shift")) == 0.5);
+    REQUIRE(spec.baseline == "RS");
+    REQUIRE(spec.output == (dir.path().parent_path() / "results" / "t").lexically_normal());
+}
+
+TEST_CASE("bad experiments are refused with file, line and field", "[experiment_config]") {
+    CHECK_THAT(error_of("trials = 3\nseed = [1\n"), Catch::Contains("exp.toml:2") && Catch::Contains("TOML syntax"));
+    CHECK_THAT(error_of(replace(valid, "trials = 3", "trials = 0")), Catch::Contains("exp.toml:2: trials: must be >= 1"));
+    CHECK_THAT(error_of(replace(valid, "trials = 3", "trials = \"many\"")), Catch::Contains("trials: expects an integer"));
+    CHECK_THAT(error_of(replace(valid, "name = \"random_search\"\nbatch", "name = \"gwoo\"\nbatch")),
+               Catch::Contains("exp.toml:9: optimizer[0].name: unknown optimizer 'gwoo'") && Catch::Contains("random_search"));
+    CHECK_THAT(error_of(replace(valid, "name = \"test_sphere\"", "name = \"nope\"")),
+               Catch::Contains("problem[0].name: unknown problem 'nope'"));
+    CHECK_THAT(error_of(replace(valid, "batch = [5, 10]", "batch = [5, 0]")),
+               Catch::Contains("exp.toml:10: optimizer[0].batch: must lie in [1, 1000000] (got 0)"));
+    CHECK_THAT(error_of(replace(valid, "batch = [5, 10]", "batch = 2.5")), Catch::Contains("optimizer[0].batch: expects an integer"));
+    CHECK_THAT(error_of(replace(valid, "shift = 0.5", "shfit = 0.5")),
+               Catch::Contains("exp.toml:19: problem[0].shfit: unknown parameter; known: dimension, shift"));
+    CHECK_THAT(error_of(replace(valid, "iterations = 10", "iterations = -1")), Catch::Contains("budget.iterations: must be >= 1"));
+    CHECK_THAT(error_of(replace(valid, "iterations = 10", "")), Catch::Contains("budget: set iterations, evaluations or both"));
+    CHECK_THAT(error_of(replace(valid, "baseline = \"RS\"", "baseline = \"GWO\"")),
+               Catch::Contains("analysis.baseline: 'GWO' is not an optimizer label"));
+    CHECK_THAT(error_of(replace(valid, "label = \"RS\"", "label = \"random_search(batch=5)\"")),
+               Catch::Contains("both labelled 'random_search(batch=5)'"));
+    CHECK_THAT(error_of(replace(valid, "seed = 11", "seed = 11\ntrails = 4")), Catch::Contains("exp.toml:4: trails: unknown key"));
+    CHECK_THAT(error_of(replace(valid, "batch = [5, 10]", "batch = []")), Catch::Contains("an empty list gives no variant"));
+    REQUIRE(error_of(valid).empty());
+}
+
+TEST_CASE("grid expansion is the cartesian product in declaration order", "[experiment_config]") {
+    const auto grid = expand_grid({{"a", {std::int64_t{1}, std::int64_t{2}}}, {"b", {true, false}}, {"c", {0.5}}});
+    REQUIRE(grid.size() == 4);
+    REQUIRE(std::get<std::int64_t>(grid[1].at("a")) == 1);
+    REQUIRE(std::get<bool>(grid[1].at("b")) == false);
+    REQUIRE(std::get<std::int64_t>(grid[2].at("a")) == 2);
+}

@@ -1,0 +1,48 @@
+#include <catch2/catch.hpp>
+
+#include "framework/input_error.hpp"
+#include "framework/results_store.hpp"
+#include "tests/temporary_directory.hpp"
+
+using namespace mhb;
+
+TEST_CASE("trial records survive a JSON round trip, infinities included", "[results_store]") {
+    TrialRecord r;
+    r.optimizer = "gwo";
+    r.problem = "F1";
+    r.trial = 4;
+    r.seed = 0xFFFFFFFFFFFFFFFFULL;
+    r.ok = false;
+    r.error = "boom";
+    r.best_fitness = 1.0 / 3.0;
+    r.best_position = Vector::LinSpaced(3, -1, 1);
+    r.evaluations = 30;
+    r.iterations = 2;
+    r.seconds = 0.25;
+    r.trace_evaluations = {10, 20, 30};
+    r.trace_best = {std::numeric_limits<double>::infinity(), 2.0, 1.0 / 3.0};
+    r.trace_position = {Vector::Zero(3), Vector::Ones(3), r.best_position};
+    const auto back = trial_from_json(to_json(r));
+    REQUIRE(back.seed == r.seed);
+    REQUIRE_FALSE(back.ok);
+    REQUIRE(back.error == "boom");
+    REQUIRE(back.best_fitness == r.best_fitness);
+    REQUIRE(back.best_position == r.best_position);
+    REQUIRE(std::isinf(back.trace_best[0]));
+    REQUIRE(back.trace_best[2] == r.trace_best[2]);
+    REQUIRE(back.trace_position[1] == Vector::Ones(3));
+}
+
+TEST_CASE("a corrupt line in the middle of a results file is bad input", "[results_store]") {
+    testing::TemporaryDirectory dir;
+    TrialRecord r;
+    r.best_position = Vector::Zero(1);
+    const std::string good = to_json(r).dump();
+    const auto path = dir.write("results.jsonl", good + "\n{not json\n" + good + "\n");
+    try {
+        read_results(path);
+        FAIL("accepted");
+    } catch (const InputError& e) {
+        REQUIRE(e.line() == 2);
+    }
+}
