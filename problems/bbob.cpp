@@ -602,10 +602,8 @@ private:
         double product = 1.0;
         for (Index i = 0; i < d_; ++i) {
             double s = 0;
-            for (int j = 1; j < 33; ++j) {
-                const double two_j = std::pow(2.0, j);
+            for (double two_j = 2.0; two_j <= 4294967296.0; two_j *= 2.0)  // 2^1 .. 2^32, exact
                 s += std::abs(two_j * z[i] - std::floor(two_j * z[i] + 0.5)) / two_j;
-            }
             product *= 1.0 + (static_cast<double>(i) + 1.0) * s;
         }
         const double d = d_;

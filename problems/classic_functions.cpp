@@ -98,24 +98,25 @@ void griewank(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) {
     }
 }
 
-// u(x, a, k, m) of Yao's F12/F13: a penalty outside [-a, a].
-double boundary_penalty(double x, double a, double k, double m) {
-    if (x > a) return k * std::pow(x - a, m);
-    if (x < -a) return k * std::pow(-x - a, m);
-    return 0.0;
+// u(x, a, k, m) of Yao's F12/F13, a penalty outside [-a, a]; both use m = 4.
+double boundary_penalty(double x, double a, double k) {
+    const double excess = x > a ? x - a : x < -a ? -x - a : 0.0;
+    return k * (excess * excess) * (excess * excess);
 }
+
+double square(double v) { return v * v; }
 
 void penalized_1(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) {
     const Index d = x.rows();
     for (Index j = 0; j < x.cols(); ++j) {
         // y_i = 1 + (x_i + 1)/4
         auto y = [&](Index i) { return 1.0 + (x(i, j) + 1.0) / 4.0; };
-        double s = 10.0 * std::pow(std::sin(pi * y(0)), 2);
+        double s = 10.0 * square(std::sin(pi * y(0)));
         for (Index i = 0; i + 1 < d; ++i)
-            s += std::pow(y(i) - 1.0, 2) * (1.0 + 10.0 * std::pow(std::sin(pi * y(i + 1)), 2));
-        s += std::pow(y(d - 1) - 1.0, 2);
+            s += square(y(i) - 1.0) * (1.0 + 10.0 * square(std::sin(pi * y(i + 1))));
+        s += square(y(d - 1) - 1.0);
         double penalty = 0.0;
-        for (Index i = 0; i < d; ++i) penalty += boundary_penalty(x(i, j), 10.0, 100.0, 4.0);
+        for (Index i = 0; i < d; ++i) penalty += boundary_penalty(x(i, j), 10.0, 100.0);
         f[j] = pi / static_cast<double>(d) * s + penalty;
     }
 }
@@ -123,12 +124,12 @@ void penalized_1(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) {
 void penalized_2(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) {
     const Index d = x.rows();
     for (Index j = 0; j < x.cols(); ++j) {
-        double s = std::pow(std::sin(3.0 * pi * x(0, j)), 2);
+        double s = square(std::sin(3.0 * pi * x(0, j)));
         for (Index i = 0; i + 1 < d; ++i)
-            s += std::pow(x(i, j) - 1.0, 2) * (1.0 + std::pow(std::sin(3.0 * pi * x(i + 1, j)), 2));
-        s += std::pow(x(d - 1, j) - 1.0, 2) * (1.0 + std::pow(std::sin(2.0 * pi * x(d - 1, j)), 2));
+            s += square(x(i, j) - 1.0) * (1.0 + square(std::sin(3.0 * pi * x(i + 1, j))));
+        s += square(x(d - 1, j) - 1.0) * (1.0 + square(std::sin(2.0 * pi * x(d - 1, j))));
         double penalty = 0.0;
-        for (Index i = 0; i < d; ++i) penalty += boundary_penalty(x(i, j), 5.0, 100.0, 4.0);
+        for (Index i = 0; i < d; ++i) penalty += boundary_penalty(x(i, j), 5.0, 100.0);
         f[j] = 0.1 * s + penalty;
     }
 }
