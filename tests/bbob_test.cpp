@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -134,8 +135,14 @@ TEST_CASE("BBOB instances reproduce values computed by COCO", "[bbob]") {
 }
 
 TEST_CASE("BBOB f_opt of instance 1 is COCO's", "[bbob]") {
-    // Published with COCO's data sets (e.g. bbob_f001_i01: f_opt = 79.48), and 1000 clipping on f15/f22.
-    REQUIRE(*bbob(1, 10)->truth().optimum_value == 79.48);
+    // The f_opt of bbob_fXXX_i01 in COCO's data sets, clipped to +-1000 on f15 and f22.
+    const std::array<double, 24> published{79.48,  -209.88, -462.09, -462.09, -9.21,   35.90,  92.94,   149.15,
+                                           123.83, -54.94,  76.27,   -621.11, 29.97,   -52.35, 1000.00, 71.35,
+                                           -16.94, -16.94,  -102.55, -546.50, 40.78,   -1000.00, 6.87,  102.61};
+    for (int f = 1; f <= 24; ++f) {
+        INFO("f" << f);
+        for (std::int64_t d : {2, 10, 40}) REQUIRE(*bbob(f, d)->truth().optimum_value == published[f - 1]);
+    }
     REQUIRE(*bbob(3, 10)->truth().optimum_value == *bbob(4, 10)->truth().optimum_value);   // f4 borrows f3's seed
     REQUIRE(*bbob(17, 10)->truth().optimum_value == *bbob(18, 10)->truth().optimum_value);  // f18 borrows f17's
     for (int f = 1; f <= 24; ++f) {
