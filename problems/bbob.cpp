@@ -238,10 +238,7 @@ public:
                 scale_ = conditioning(d_, std::sqrt(10.0));
                 break;
             case 5: build_linear_slope(seed); break;
-            case 6:
-                build_rotated(seed, &BbobFunction::attractive_sector);
-                linear_ = legacy_product(r_, std::sqrt(10.0), q_);
-                break;
+            case 6: build_conditioned(seed, &BbobFunction::attractive_sector, std::sqrt(10.0)); break;
             case 7:
                 build_rotated(seed, &BbobFunction::step_ellipsoid);
                 truth_.true_parameters.reset();  // flat around x_opt: not a unique minimiser
@@ -265,23 +262,16 @@ public:
                 xopt_ = legacy_xopt(d_, seed + 1000000);  // f12 alone draws x_opt from the shifted seed
                 truth_.true_parameters = xopt_;
                 break;
-            case 13:
-                build_rotated(seed, &BbobFunction::sharp_ridge);
-                linear_ = legacy_product(r_, std::sqrt(10.0), q_);
-                break;
+            case 13: build_conditioned(seed, &BbobFunction::sharp_ridge, std::sqrt(10.0)); break;
             case 14:
                 build_rotated(seed, &BbobFunction::different_powers);
                 weight_.resize(d_);
                 for (int i = 0; i < d_; ++i) weight_[i] = 2.0 + 4.0 * i / (d_ - 1.0);
                 break;
-            case 15:
-                build_rotated(seed, &BbobFunction::rotated_rastrigin);
-                linear_ = legacy_product(r_, std::sqrt(10.0), q_);
-                break;
+            case 15: build_conditioned(seed, &BbobFunction::rotated_rastrigin, std::sqrt(10.0)); break;
             case 16:
-                build_rotated(seed, &BbobFunction::weierstrass);
+                build_conditioned(seed, &BbobFunction::weierstrass, 1.0 / std::sqrt(100.0));
                 truth_.true_parameters.reset();  // every integer z is a global minimum
-                linear_ = legacy_product(r_, 1.0 / std::sqrt(100.0), q_);
                 break;
             case 17:
             case 18: {
@@ -295,9 +285,8 @@ public:
             case 21: build_gallagher(seed, 101); break;
             case 22: build_gallagher(seed, 21); break;
             case 23:
-                build_rotated(seed, &BbobFunction::katsuura);
+                build_conditioned(seed, &BbobFunction::katsuura, std::sqrt(100.0));
                 truth_.true_parameters.reset();  // every integer z with product 1 is a global minimum
-                linear_ = legacy_product(r_, std::sqrt(100.0), q_);
                 break;
             case 24: build_lunacek(seed); break;
             default: throw std::invalid_argument("BBOB function number must be 1..24");
@@ -328,6 +317,11 @@ private:
         build_shifted(seed, kernel);
         r_ = legacy_rotation(d_, seed + 1000000);
         q_ = legacy_rotation(d_, seed);
+    }
+    // The map R Lambda Q with lambda_i = base^(i/(D-1)).
+    void build_conditioned(std::int64_t seed, Kernel kernel, double base) {
+        build_rotated(seed, kernel);
+        linear_ = legacy_product(r_, base, q_);
     }
     // f5: the optimum is the corner 5*sign(x_opt), on the boundary of the box.
     void build_linear_slope(std::int64_t seed) {
