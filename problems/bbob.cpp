@@ -101,10 +101,14 @@ Vector legacy_xopt(int d, std::int64_t seed) {
     return x;
 }
 
+// The seed of an instance: f4 and f18 are variants of f3 and f17 on the same instances.
+std::int64_t instance_seed(int function, std::int64_t instance) {
+    return (function == 4 ? 3 : function == 18 ? 17 : function) + 10000 * instance;
+}
+
 // f_opt: a ratio of two Gaussians rounded to 0.01 and clipped to [-1000, 1000].
 double legacy_fopt(int function, std::int64_t instance) {
-    const std::int64_t base = function == 4 ? 3 : function == 18 ? 17 : function;
-    const std::int64_t seed = base + 10000 * instance;
+    const std::int64_t seed = instance_seed(function, instance);
     const double numerator = legacy_gaussian(1, seed)[0];
     const double denominator = legacy_gaussian(1, seed + 1)[0];
     return std::min(1000.0, std::max(-1000.0, std::floor(100.0 * 100.0 * numerator / denominator + 0.5) / 100.0));
@@ -218,7 +222,7 @@ public:
     BbobFunction(int function, int dimension, std::int64_t instance)
         : function_(function), d_(dimension), instance_(instance), fopt_(legacy_fopt(function, instance)) {
         set_domain(dimension, -5.0, 5.0);
-        const std::int64_t seed = (function == 4 ? 3 : function == 18 ? 17 : function) + 10000 * instance;
+        const std::int64_t seed = instance_seed(function, instance);
         truth_.optimum_value = fopt_;
         switch (function) {
             case 1: build_shifted(seed, &BbobFunction::sphere); break;
