@@ -1,0 +1,106 @@
+// End to end through the `mhbench` binary, as a user runs it.
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "framework/results_store.hpp"
+#include "framework/statistics.hpp"
+#include "tests/temporary_directory.hpp"
+
+using namespace mhb;
+
+namespace {
+struct Outcome {
+    int code;
+    std::string err;
+};
+Outcome run_cli(const std::string& args, const testing::TemporaryDirectory& dir) {
+    const auto err = dir.path() / "stderr.txt";
+    const std::string command = std::string(MHBENCH_CLI) + " " + args + " > " + (dir.path() / "stdout.txt").string() + " 2> " + err.string();
+    const int status = std::system(command.c_str());
+    return {WEXITSTATUS(status), testing::read_file(err)};
+}
+
+// table.csv without the run-time columns, which are the only ones allowed to differ between runs.
+std::string without_times(const std::string& csv) {
+    std::stringstream in(csv);
+    std::string line, out;
+    std::vector<bool> keep;
+    bool header = true;
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        std::stringstream ls(line);
+        std::string cell;
+        while (std::getline(ls, cell, ',')) cells.push_back(cell);
+        if (header) {
+            for (const auto& c : cells) keep.push_back(c.find("time") == std::string::npos);
+            header = false;
+        }
+        for (std::size_t i = 0; i < cells.size(); ++i)
+            if (i < keep.size() && keep[i]) out += cells[i] + ",";
+        out += "\n";
+    }
+    return out;
+}
+}  // namespace
+
+TEST_CASE("a TOML experiment through the CLI gives identical, correct tables on 1 and 2 threads", "[cli]") {
+    testing::TemporaryDirectory dir;
+    const std::string config = std::string(MHBENCH_SOURCE_DIR) + "/experiments/smoke.toml";
+    REQUIRE(run_cli("run " + config + " --threads 1 --quiet --out " + (dir.path() / "t1").string(), dir).code == 0);
+    REQUIRE(run_cli("run " + config + " --threads 2 --quiet --no-plots --out " + (dir.path() / "t2").string(), dir).code == 0);
+    const auto csv1 = testing::read_file(dir.path() / "t1" / "table.csv");
+    const auto csv2 = testing::read_file(dir.path() / "t2" / "table.csv");
+    REQUIRE_FALSE(csv1.empty());
+    REQUIRE(without_times(csv1) == without_times(csv2));
+    REQUIRE(std::filesystem::exists(dir.path() / "t1" / "convergence_F1_dimension_5.png"));
+    REQUIRE(std::filesystem::exists(dir.path() / "t1" / "boxplot_bbob_f1_dimension_3.svg"));
+
+    // The table's numbers are those of the trial records: recompute F1's mean from results.jsonl.
+    const auto records = read_results(dir.path() / "t1" / "results.jsonl").records;
+    REQUIRE(records.size() == 2 * 2 * 5);
+    std::vector<double> f;
+    for (const auto& r : records)
+        if (r.problem == "F1(dimension=5)" && r.optimizer == "random_search(batch=40)") f.push_back(r.best_fitness);
+    REQUIRE(f.size() == 5);
+    const double mean = stats::summarize(f).mean;
+    REQUIRE_THAT(csv1, Catch::Contains(fmt::format("F1(dimension=5),random_search(batch=40),5,0,{:.17g},", mean)));
+
+    // `table` remakes the same table from the directory alone.
+    REQUIRE(run_cli("table " + (dir.path() / "t2").string() + " --no-plots", dir).code == 0);
+    REQUIRE(testing::read_file(dir.path() / "t2" / "table.csv") == csv2);
+}
+
+TEST_CASE("bad input through the CLI: one message naming file and line, exit code 2", "[cli]") {
+    testing::TemporaryDirectory dir;
+    const auto bad = dir.write("bad.toml", "name = \"x\"\ntrials = 2\nseed = 1\n[budget]\niterations = 5\n"
+                                           "[[optimizer]]\nname = \"random_search\"\nbatch = -3\n[[problem]]\nname = \"F1\"\n");
+    auto out = run_cli("run " + bad.string(), dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::Contains("bad.toml:8: optimizer[0].batch: must lie in [1, 1000000] (got -3)"));
+    out = run_cli("run " + (dir.path() / "missing.toml").string(), dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::Contains("missing.toml: no such file"));
+    out = run_cli("run", dir);
+    REQUIRE(out.code == 2);
+    out = run_cli("run " + bad.string() + " --threads 0", dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::Contains("--threads"));
+    out = run_cli("frobnicate", dir);
+    REQUIRE(out.code == 2);
+    out = run_cli("table " + dir.path().string(), dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::Contains("experiment.json: missing"));
+}
+
+TEST_CASE("`mhbench list` shows every registered plugin with its parameters", "[cli]") {
+    testing::TemporaryDirectory dir;
+    REQUIRE(run_cli("list", dir).code == 0);
+    const auto out = testing::read_file(dir.path() / "stdout.txt");
+    REQUIRE_THAT(out, Catch::Contains("random_search") && Catch::Contains("batch") && Catch::Contains("bbob_f24") &&
+                          Catch::Contains("F23"));
+}
