@@ -185,7 +185,7 @@ TEST_CASE("classic functions evaluate a population exactly as one column at a ti
     }
 }
 
-TEST_CASE("F7's noise is uniform on [0,1), fixed by the context seed", "[classic_functions]") {
+TEST_CASE("F7's noise is uniform on the unit interval, fixed by the context seed", "[classic_functions]") {
     ProblemContext a, b;
     a.seed = 1;
     b.seed = 2;

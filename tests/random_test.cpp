@@ -73,7 +73,7 @@ TEST_CASE("uniform, normal and Cauchy draws follow their distributions (quantile
     }
 }
 
-TEST_CASE("below(n) is uniform over [0, n)", "[random]") {
+TEST_CASE("below(n) is uniform over 0..n-1", "[random]") {
     Rng rng(5);
     std::vector<int> counts(7, 0);
     const int n = 70000;
