@@ -76,12 +76,30 @@ public:
             const std::string label = text(*table, "label", where + ".label", line, false);
 
             std::vector<std::pair<std::string, std::vector<ParameterValue>>> axes;
+            std::vector<double> box_lower, box_upper;
+            long box_line = line;
             std::map<std::string, long> key_lines;
             std::vector<std::string> grid_keys;
             for (const auto& [k, v] : *table) {
                 const std::string param(k.str());
                 if (param == "name" || param == "label") continue;
                 const std::string field = where + "." + param;
+                if (std::string(kind) == "problem" && (param == "lower" || param == "upper")) {
+                    auto& target = param == "lower" ? box_lower : box_upper;
+                    box_line = line_of(v);
+                    if (const auto* arr = v.as_array()) {
+                        for (const auto& item : *arr) {
+                            auto d = item.template value<double>();
+                            if (!d) fail(line_of(item), field, "expects numbers");
+                            target.push_back(*d);
+                        }
+                    } else if (auto d = v.template value<double>()) {
+                        target.push_back(*d);
+                    } else {
+                        fail(line_of(v), field, "expects a number or a list of numbers");
+                    }
+                    continue;
+                }
                 key_lines[param] = line_of(v);
                 std::vector<ParameterValue> values;
                 if (const auto* arr = v.as_array()) {
@@ -117,6 +135,9 @@ public:
                     variant.label = suffix.empty() ? base : base + "(" + suffix + ")";
                 }
                 variant.values = std::move(given);
+                variant.lower = box_lower;
+                variant.upper = box_upper;
+                variant.bounds_line = box_line;
                 out.push_back(std::move(variant));
             }
         }

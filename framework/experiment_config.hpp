@@ -19,6 +19,10 @@ struct PluginVariant {
     std::string name;   // registry name
     std::map<std::string, ParameterValue> values;
     long line = 0;      // where it was declared in the config
+    // Problems only: a box that replaces the problem's own (`lower`/`upper` keys; one value for
+    // all coordinates or one per coordinate).
+    std::vector<double> lower, upper;
+    long bounds_line = 0;
 };
 
 struct ExperimentSpec {

@@ -27,11 +27,27 @@ ProblemContext problem_context(const ExperimentSpec& spec, std::uint64_t trial_s
     return ProblemContext{fs::absolute(spec.file).parent_path(), splitmix64(state)};
 }
 
+// The problem with the config's box applied, if it gives one.
+std::unique_ptr<Problem> instantiate(const PluginVariant& v, const ProblemContext& ctx) {
+    auto problem = make_problem(v.name, v.values, ctx);
+    if (!v.lower.empty() || !v.upper.empty()) {
+        auto expand = [&](const std::vector<double>& given, const Vector& own) -> Vector {
+            if (given.empty()) return own;
+            if (given.size() == 1) return Vector::Constant(problem->dimension(), given[0]);
+            return Eigen::Map<const Vector>(given.data(), static_cast<Eigen::Index>(given.size()));
+        };
+        problem->override_bounds(expand(v.lower, problem->bounds().lower), expand(v.upper, problem->bounds().upper));
+    }
+    return problem;
+}
+
 std::unique_ptr<Problem> create_problem(const ExperimentSpec& spec, const PluginVariant& v, const ProblemContext& ctx) {
     try {
-        return make_problem(v.name, v.values, ctx);
+        return instantiate(v, ctx);
     } catch (const InputError&) {
         throw;
+    } catch (const std::invalid_argument& e) {
+        throw InputError(spec.file.string(), v.bounds_line, v.label + " lower/upper", e.what());
     } catch (const std::exception& e) {
         throw InputError(spec.file.string(), v.line, "problem " + v.label, e.what());
     }
@@ -153,7 +169,7 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
             const std::uint64_t seed = derive_seed(spec.seed, ov.label, pv.label, static_cast<std::uint64_t>(task.trial));
             TrialRecord record;
             try {
-                auto problem = make_problem(pv.name, pv.values, problem_context(spec, seed));
+                auto problem = instantiate(pv, problem_context(spec, seed));
                 auto optimizer = make_optimizer(ov.name, ov.values);
                 TrialSetup setup{spec.budget, seed, problem->has_named_parameters()};
                 record = run_trial(*optimizer, *problem, setup);

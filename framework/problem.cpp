@@ -19,6 +19,16 @@ void Problem::set_domain(Vector lower, Vector upper, std::vector<std::string> na
     parameter_names_ = std::move(names);
 }
 
+void Problem::override_bounds(const Vector& lower, const Vector& upper) {
+    if (lower.size() != dimension() || upper.size() != dimension())
+        throw std::invalid_argument("bounds need " + std::to_string(dimension()) + " values (one per parameter) or one for all");
+    for (Eigen::Index j = 0; j < lower.size(); ++j)
+        if (!(lower[j] <= upper[j]))
+            throw std::invalid_argument("lower > upper for " + parameter_names_[static_cast<std::size_t>(j)] + " (" +
+                                        std::to_string(lower[j]) + " > " + std::to_string(upper[j]) + ")");
+    bounds_ = Bounds{lower, upper};
+}
+
 void Problem::set_domain(int dimension, double lower, double upper) {
     set_domain(Vector::Constant(dimension, lower), Vector::Constant(dimension, upper));
 }

@@ -45,6 +45,10 @@ public:
     // and should not allocate per candidate.
     virtual void evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) const = 0;
 
+    // Replaces the box (an experiment may narrow or widen it, as the seed paper's Table 2 does);
+    // std::invalid_argument when sizes differ or lower > upper somewhere.
+    void override_bounds(const Vector& lower, const Vector& upper);
+
     // Free text shown in `mhbench list` and reports (e.g. the data file a PMSM problem was fitted to).
     virtual std::string describe() const { return {}; }
 

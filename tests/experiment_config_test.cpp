@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "framework/experiment_config.hpp"
+#include "framework/experiment_runner.hpp"
 #include "framework/input_error.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -97,4 +98,31 @@ TEST_CASE("grid expansion is the cartesian product in declaration order", "[expe
     REQUIRE(std::get<std::int64_t>(grid[1].at("a")) == 1);
     REQUIRE(std::get<bool>(grid[1].at("b")) == false);
     REQUIRE(std::get<std::int64_t>(grid[2].at("a")) == 2);
+}
+
+TEST_CASE("a problem's box can be replaced from the config; lower > upper is refused", "[experiment_config]") {
+    testing::TemporaryDirectory dir;
+    const std::string base = "name = \"b\"\ntrials = 1\nseed = 1\n[budget]\niterations = 2\n"
+                             "[[optimizer]]\nname = \"random_search\"\n[[problem]]\nname = \"test_sphere\"\n";
+    auto spec = load_experiment(dir.write("ok.toml", base + "lower = -2\nupper = [1, 2, 3]\n"));
+    const auto info = describe_experiment(spec);
+    (void)info;
+    RunOptions o;
+    o.output = dir.path() / "out";
+    run_experiment(spec, o);
+    for (const auto& r : read_results(dir.path() / "out" / "results.jsonl").records) {
+        REQUIRE(r.ok);
+        REQUIRE(r.best_position.minCoeff() >= -2.0);
+        REQUIRE(r.best_position[0] <= 1.0);
+    }
+    spec = load_experiment(dir.write("bad.toml", base + "lower = [0, 0, 5]\nupper = [1, 2, 3]\n"));
+    try {
+        describe_experiment(spec);
+        FAIL("accepted lower > upper");
+    } catch (const InputError& e) {
+        REQUIRE(e.line() == 11);
+        REQUIRE_THAT(e.what(), Catch::Contains("lower > upper for x3"));
+    }
+    spec = load_experiment(dir.write("short.toml", base + "lower = [0, 0]\n"));
+    REQUIRE_THROWS_WITH(describe_experiment(spec), Catch::Contains("bounds need 3 values"));
 }
