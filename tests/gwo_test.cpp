@@ -13,6 +13,7 @@
 #include "optimizers/gwo.hpp"
 #include "tests/manual_run.hpp"
 #include "tests/sphere_fixture.hpp"
+#include "tests/trial_checks.hpp"
 
 using namespace mhb;
 
@@ -164,14 +165,7 @@ TEST_CASE("GWO spends N evaluations per iteration, exactly the budget, and stays
 
 TEST_CASE("a GWO trial is fixed by its seed", "[gwo]") {
     testing::ShiftedSphere sphere(5, -5, 5, 1.0);
-    for (const auto& variant : kVariants) {
-        const auto a = run_trial(*make_gwo(variant), sphere, {Budget{30, 0}, 42, true});
-        const auto b = run_trial(*make_gwo(variant), sphere, {Budget{30, 0}, 42, true});
-        const auto c = run_trial(*make_gwo(variant), sphere, {Budget{30, 0}, 43, true});
-        REQUIRE(a.trace_best == b.trace_best);
-        REQUIRE(a.best_position == b.best_position);
-        REQUIRE(a.trace_best != c.trace_best);
-    }
+    for (const auto& variant : kVariants) testing::require_seed_fixes_trial([&] { return make_gwo(variant); }, sphere);
 }
 
 TEST_CASE("GWO refuses fewer than three wolves and unknown variants", "[gwo]") {
@@ -188,11 +182,8 @@ TEST_CASE("every GWO variant converges on a shifted sphere", "[gwo]") {
     // seeds below 1e-3: more than four orders of magnitude better than random search.
     testing::ShiftedSphere sphere(10, -10, 10, 3.0);
     for (const auto& variant : kVariants) {
-        std::vector<double> best;
-        for (std::uint64_t seed = 1; seed <= 9; ++seed)
-            best.push_back(run_trial(*make_gwo(variant), sphere, {Budget{300, 0}, seed, false}).best_fitness);
-        std::nth_element(best.begin(), best.begin() + 4, best.end());
-        INFO(variant << " median " << best[4]);
-        REQUIRE(best[4] < 1e-3);
+        const double median = testing::median_best([&] { return make_gwo(variant); }, sphere, Budget{300, 0}, 9);
+        INFO(variant << " median " << median);
+        REQUIRE(median < 1e-3);
     }
 }

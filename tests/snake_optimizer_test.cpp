@@ -13,6 +13,7 @@
 #include "optimizers/snake/snake_optimizer.hpp"
 #include "tests/manual_run.hpp"
 #include "tests/sphere_fixture.hpp"
+#include "tests/trial_checks.hpp"
 
 using namespace mhb;
 
@@ -107,14 +108,7 @@ TEST_CASE("evaluations: N per SO iteration, 2N more with the cuckoo pass, N + qu
 
 TEST_CASE("a snake trial is fixed by its seed", "[snake]") {
     testing::ShiftedSphere sphere(5, -5, 5, 1.0);
-    for (const auto& name : kFamily) {
-        const auto a = run_trial(*make_optimizer(name), sphere, {Budget{30, 0}, 42, true});
-        const auto b = run_trial(*make_optimizer(name), sphere, {Budget{30, 0}, 42, true});
-        const auto c = run_trial(*make_optimizer(name), sphere, {Budget{30, 0}, 43, true});
-        REQUIRE(a.trace_best == b.trace_best);
-        REQUIRE(a.trace_position == b.trace_position);
-        REQUIRE(a.trace_best != c.trace_best);
-    }
+    for (const auto& name : kFamily) testing::require_seed_fixes_trial([&] { return make_optimizer(name); }, sphere);
 }
 
 TEST_CASE("greedy selection: no snake ever gets worse, and the food is the best snake", "[snake]") {
@@ -233,11 +227,8 @@ TEST_CASE("SOA and ISOA converge on a shifted sphere", "[snake]") {
     // Required: the median of 9 seeds below 1e-4, which SOA meets with two orders to spare.
     testing::ShiftedSphere sphere(10, -10, 10, 3.0);
     for (const char* name : {"soa", "isoa"}) {
-        std::vector<double> best;
-        for (std::uint64_t seed = 1; seed <= 9; ++seed)
-            best.push_back(run_trial(*make_optimizer(name), sphere, {Budget{300, 0}, seed, false}).best_fitness);
-        std::nth_element(best.begin(), best.begin() + 4, best.end());
-        INFO(name << " median " << best[4]);
-        REQUIRE(best[4] < 1e-4);
+        const double median = testing::median_best([&] { return make_optimizer(name); }, sphere, Budget{300, 0}, 9);
+        INFO(name << " median " << median);
+        REQUIRE(median < 1e-4);
     }
 }

@@ -47,37 +47,38 @@ TEST_CASE("Q and Temp follow eq. (7) and (9)", "[snake_phase_schedule]") {
     REQUIRE(SnakePhaseSchedule::temperature(0.5) == Approx(std::exp(-0.5)));
 }
 
+namespace {
+
+// The schedule switches at the fractions `exploration_end` and `hot_end` (derived by hand from the
+// thresholds), and a 1000-iteration run spends exactly t = 1..floor(1000 x) in each phase.
+PhaseCounts require_boundaries(const SnakePhaseSchedule& schedule, double exploration_end, double hot_end) {
+    REQUIRE(schedule.exploring(exploration_end - 1e-4));
+    REQUIRE_FALSE(schedule.exploring(exploration_end + 1e-4));
+    REQUIRE(schedule.hot(hot_end - 1e-4));
+    REQUIRE_FALSE(schedule.hot(hot_end + 1e-4));
+    const int last_exploration = static_cast<int>(1000 * exploration_end), last_hot = static_cast<int>(1000 * hot_end);
+    const auto c = run_phases(schedule, 1000);
+    REQUIRE(c.exploration == last_exploration);
+    REQUIRE(c.last_exploration == last_exploration);
+    REQUIRE(c.hot == last_hot - last_exploration);
+    REQUIRE(c.last_hot == last_hot);
+    REQUIRE(c.fight + c.mating == 1000 - last_hot);
+    return c;
+}
+
+}  // namespace
+
 TEST_CASE("SO's thresholds: exploration for t < 0.307 T, hot for t < 0.511 T", "[snake_phase_schedule]") {
     // Q = 0.5 exp(t/T - 1) < 0.25  <=>  t/T < 1 - ln 2 = 0.306853;
     // exp(-t/T) > 0.6              <=>  t/T < -ln 0.6 = 0.510826.
-    const SnakePhaseSchedule so{0.25, 0.6};
-    REQUIRE(so.exploring(0.3068));
-    REQUIRE_FALSE(so.exploring(0.3069));
-    REQUIRE(so.hot(0.5108));
-    REQUIRE_FALSE(so.hot(0.5109));
-    // T = 1000: exploration t = 1..306, hot t = 307..510, then 490 cold iterations, fight with
-    // probability 0.4 (SO.m: rand > 0.6 is fight): mean 196, sd 10.8.
-    const auto c = run_phases(so, 1000);
-    REQUIRE(c.exploration == 306);
-    REQUIRE(c.last_exploration == 306);
-    REQUIRE(c.hot == 204);
-    REQUIRE(c.last_hot == 510);
-    REQUIRE(c.fight + c.mating == 490);
+    const auto c = require_boundaries({0.25, 0.6}, 0.306853, 0.510826);
+    // 490 cold iterations, fight with probability 0.4 (SO.m: rand > 0.6 is fight): mean 196, sd 10.8.
     REQUIRE(std::abs(c.fight - 196) < 54);
 }
 
 TEST_CASE("ISOA's thresholds: exploration for t < 0.179 T, hot for t < 0.223 T", "[snake_phase_schedule]") {
     // Q < 0.22  <=>  t/T < 1 + ln 0.44 = 0.179019;  exp(-t/T) > 0.8  <=>  t/T < -ln 0.8 = 0.223144.
-    const SnakePhaseSchedule isoa{0.22, 0.8};
-    REQUIRE(isoa.exploring(0.1790));
-    REQUIRE_FALSE(isoa.exploring(0.1791));
-    REQUIRE(isoa.hot(0.2231));
-    REQUIRE_FALSE(isoa.hot(0.2232));
-    const auto c = run_phases(isoa, 1000);
-    REQUIRE(c.exploration == 179);
-    REQUIRE(c.hot == 44);
-    REQUIRE(c.last_hot == 223);
-    REQUIRE(c.fight + c.mating == 777);
+    require_boundaries({0.22, 0.8}, 0.179019, 0.223144);
 }
 
 TEST_CASE("the registered names carry the thresholds of their strategies", "[snake_phase_schedule]") {
