@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "framework/optimizer.hpp"
 #include "optimizers/snake/cauchy_cuckoo_search.hpp"
@@ -54,7 +55,8 @@ public:
     // Introspection for tests and diagnostics.
     SnakePhase last_phase() const { return phase_; }
     bool last_egg_hatched() const { return egg_hatched_; }
-    // Candidates of the last SO update (after clamping), one column per snake.
+    // The last batch of candidates evaluated (after clamping), one column per snake: the SO update's,
+    // or with the cuckoo pass on, the discovery pass's.
     const Matrix& last_candidates() const { return candidates_; }
     const Matrix& positions() const { return positions_; }
     const Vector& fitness() const { return fitness_; }
