@@ -112,9 +112,9 @@ public:
                 axes.emplace_back(param, std::move(values));
             }
             for (auto& given : expand_grid(axes)) {
+                std::string non_default;
                 try {
-                    ParameterSet checked(entry.parameters, given);
-                    (void)checked;
+                    non_default = ParameterSet(entry.parameters, given).non_default_text();
                 } catch (const ParameterError& e) {
                     auto it = key_lines.find(e.field());
                     fail(it != key_lines.end() ? it->second : line, where + "." + e.field(), e.message());
@@ -128,9 +128,7 @@ public:
                 if (label.empty() && grid_keys.empty()) {
                     // Without a label, non-default parameters name the variant so two entries of
                     // one optimiser with different settings stay apart.
-                    std::string params;
-                    for (const auto& [k, v] : given) params += (params.empty() ? "" : ",") + k + "=" + to_string(v);
-                    variant.label = params.empty() ? base : base + "(" + params + ")";
+                    variant.label = non_default.empty() ? base : base + "(" + non_default + ")";
                 } else {
                     variant.label = suffix.empty() ? base : base + "(" + suffix + ")";
                 }
