@@ -1,0 +1,66 @@
+#pragma once
+// What every population-based optimiser plugin owes the framework, checked the same way for each:
+// it spends exactly its budget, a seed fixes the whole run, and it never hands the evaluator a point
+// outside the box (the evaluator would fail the trial).
+#include <map>
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "framework/registry.hpp"
+#include "framework/trial.hpp"
+#include "tests/sphere_fixture.hpp"
+
+namespace mhb::testing {
+
+using PluginValues = std::map<std::string, ParameterValue>;
+
+// `population`: evaluations per iteration (and in initialize()) with `values` on a 4-D problem.
+inline void check_exact_budgets(const std::string& name, const PluginValues& values, std::int64_t population) {
+    ShiftedSphere sphere(4, -5, 5, 1.0);
+    auto by_iterations = make_optimizer(name, values);
+    const auto r = run_trial(*by_iterations, sphere, {Budget{7, 0}, 11, false});
+    REQUIRE(r.ok);
+    REQUIRE(r.iterations == 7);
+    REQUIRE(r.evaluations == population * 8);
+    REQUIRE(r.trace_best.size() == 8);
+
+    // Not a multiple of the population: the last generation is cut at the budget.
+    const std::int64_t budget = population * 9 + population / 2 + 1;
+    auto by_evaluations = make_optimizer(name, values);
+    const auto e = run_trial(*by_evaluations, sphere, {Budget{0, budget}, 11, false});
+    REQUIRE(e.ok);
+    REQUIRE(e.evaluations == budget);
+    REQUIRE(e.trace_evaluations.back() == budget);
+    REQUIRE(e.iterations == 9);
+}
+
+inline void check_seed_fixes_run(const std::string& name, const PluginValues& values) {
+    ShiftedSphere sphere(5, -5, 5, 0.7);
+    auto a = make_optimizer(name, values);
+    auto b = make_optimizer(name, values);
+    const auto ra = run_trial(*a, sphere, {Budget{30, 0}, 2024, true});
+    const auto rb = run_trial(*b, sphere, {Budget{30, 0}, 2024, true});
+    REQUIRE(ra.ok);
+    REQUIRE(ra.trace_best == rb.trace_best);
+    REQUIRE(ra.best_position == rb.best_position);
+    // The same object run again starts afresh: initialize() resets all state.
+    const auto again = run_trial(*a, sphere, {Budget{30, 0}, 2024, true});
+    REQUIRE(again.trace_best == ra.trace_best);
+    const auto other = run_trial(*a, sphere, {Budget{30, 0}, 2025, true});
+    REQUIRE(other.trace_best != ra.trace_best);
+}
+
+// The sphere's centre lies outside the box, beyond the corner (5, 5, 5), so the best point of the box
+// is that corner with f = 3 (7 - 5)^2 = 12 and the search presses against three walls all run long.
+inline TrialRecord run_against_corner(const std::string& name, const PluginValues& values, std::int64_t evaluations,
+                                      std::uint64_t seed) {
+    ShiftedSphere beyond_corner(3, -5, 5, 7.0);
+    auto opt = make_optimizer(name, values);
+    auto r = run_trial(*opt, beyond_corner, {Budget{0, evaluations}, seed, false});
+    REQUIRE(r.ok);  // the evaluator fails the trial on any candidate outside the box
+    REQUIRE(r.evaluations == evaluations);
+    return r;
+}
+
+}  // namespace mhb::testing
