@@ -190,11 +190,12 @@ TEST_CASE("de plugin replayed: whole generations, rand/1 donors, greedy one-to-o
     REQUIRE(uniquely_explained > 50);  // most of the 72 trials pin their donors down
 }
 
-TEST_CASE("de spends exactly its budget and a seed fixes the run", "[de]") {
+TEST_CASE("de spends exactly its budget, a seed fixes the run, only ranks matter", "[de]") {
     testing::check_exact_budgets("de", {}, 50);
     // population 0: Storn & Price's NP = 10 D, i.e. 40 on the 4-D contract problem
     testing::check_exact_budgets("de", {{"population", std::int64_t{0}}}, 40);
     testing::check_seed_fixes_run("de", {});
+    testing::check_invariance_to_monotone_transform("de", {});
 }
 
 TEST_CASE("de converges on the shifted sphere", "[de]") {

@@ -2,6 +2,7 @@
 // What every population-based optimiser plugin owes the framework, checked the same way for each:
 // it spends exactly its budget, a seed fixes the whole run, and it never hands the evaluator a point
 // outside the box (the evaluator would fail the trial).
+#include <cmath>
 #include <map>
 #include <string>
 
@@ -49,6 +50,36 @@ inline void check_seed_fixes_run(const std::string& name, const PluginValues& va
     REQUIRE(again.trace_best == ra.trace_best);
     const auto other = run_trial(*a, sphere, {Budget{30, 0}, 2025, true});
     REQUIRE(other.trace_best != ra.trace_best);
+}
+
+// The square root of the shifted sphere: the same ranking of every set of points, other values.
+class RootOfSphere final : public Problem {
+public:
+    RootOfSphere(int dimension, double lower, double upper, double shift) : sphere_(dimension, lower, upper, shift) {
+        set_domain(dimension, lower, upper);
+    }
+    void evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) const override {
+        sphere_.evaluate(x, f);
+        f = f.cwiseSqrt();
+    }
+
+private:
+    ShiftedSphere sphere_;
+};
+
+// An optimiser that only compares fitness values makes the same moves on f and on any strictly
+// increasing function of f.
+inline void check_invariance_to_monotone_transform(const std::string& name, const PluginValues& values) {
+    ShiftedSphere sphere(5, -5, 5, 0.7);
+    RootOfSphere root(5, -5, 5, 0.7);
+    auto a = make_optimizer(name, values);
+    auto b = make_optimizer(name, values);
+    const auto ra = run_trial(*a, sphere, {Budget{30, 0}, 99, true});
+    const auto rb = run_trial(*b, root, {Budget{30, 0}, 99, true});
+    REQUIRE(ra.ok);
+    REQUIRE(rb.ok);
+    REQUIRE(ra.trace_position == rb.trace_position);
+    REQUIRE(rb.best_fitness == Approx(std::sqrt(ra.best_fitness)));
 }
 
 // The sphere's centre lies outside the box, beyond the corner (5, 5, 5), so the best point of the box

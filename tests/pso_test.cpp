@@ -11,10 +11,11 @@
 using namespace mhb;
 using testing::PluginValues;
 
-TEST_CASE("pso spends exactly its budget and a seed fixes the run", "[pso]") {
+TEST_CASE("pso spends exactly its budget, a seed fixes the run, only ranks matter", "[pso]") {
     testing::check_exact_budgets("pso", {}, 30);
     testing::check_exact_budgets("pso", {{"population", std::int64_t{7}}}, 7);
     testing::check_seed_fixes_run("pso", {});
+    testing::check_invariance_to_monotone_transform("pso", {});
 }
 
 TEST_CASE("pso converges on the sphere only because the inertia weight falls", "[pso]") {
