@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
@@ -36,20 +37,28 @@ inline void check_exact_budgets(const std::string& name, const PluginValues& val
     REQUIRE(e.iterations == 9);
 }
 
+// 30 iterations on `problem` with positions recorded.
+inline TrialRecord run_thirty_iterations(const std::string& name, const PluginValues& values, const Problem& problem,
+                                         std::uint64_t seed) {
+    auto opt = make_optimizer(name, values);
+    auto r = run_trial(*opt, problem, {Budget{30, 0}, seed, true});
+    REQUIRE(r.ok);
+    return r;
+}
+
 inline void check_seed_fixes_run(const std::string& name, const PluginValues& values) {
     ShiftedSphere sphere(5, -5, 5, 0.7);
-    auto a = make_optimizer(name, values);
-    auto b = make_optimizer(name, values);
-    const auto ra = run_trial(*a, sphere, {Budget{30, 0}, 2024, true});
-    const auto rb = run_trial(*b, sphere, {Budget{30, 0}, 2024, true});
-    REQUIRE(ra.ok);
-    REQUIRE(ra.trace_best == rb.trace_best);
-    REQUIRE(ra.best_position == rb.best_position);
-    // The same object run again starts afresh: initialize() resets all state.
-    const auto again = run_trial(*a, sphere, {Budget{30, 0}, 2024, true});
-    REQUIRE(again.trace_best == ra.trace_best);
-    const auto other = run_trial(*a, sphere, {Budget{30, 0}, 2025, true});
-    REQUIRE(other.trace_best != ra.trace_best);
+    auto reused = make_optimizer(name, values);
+    const auto first = run_trial(*reused, sphere, {Budget{30, 0}, 2024, true});
+    REQUIRE(first.ok);
+    // The same object run again starts afresh (initialize() resets all state), and so does a new one.
+    const auto again = run_trial(*reused, sphere, {Budget{30, 0}, 2024, true});
+    const auto fresh = run_thirty_iterations(name, values, sphere, 2024);
+    REQUIRE(again.trace_best == first.trace_best);
+    REQUIRE(fresh.trace_best == first.trace_best);
+    REQUIRE(fresh.trace_position == first.trace_position);
+    const auto other = run_thirty_iterations(name, values, sphere, 2025);
+    REQUIRE(other.trace_best != first.trace_best);
 }
 
 // The square root of the shifted sphere: the same ranking of every set of points, other values.
@@ -70,16 +79,25 @@ private:
 // An optimiser that only compares fitness values makes the same moves on f and on any strictly
 // increasing function of f.
 inline void check_invariance_to_monotone_transform(const std::string& name, const PluginValues& values) {
-    ShiftedSphere sphere(5, -5, 5, 0.7);
-    RootOfSphere root(5, -5, 5, 0.7);
-    auto a = make_optimizer(name, values);
-    auto b = make_optimizer(name, values);
-    const auto ra = run_trial(*a, sphere, {Budget{30, 0}, 99, true});
-    const auto rb = run_trial(*b, root, {Budget{30, 0}, 99, true});
-    REQUIRE(ra.ok);
-    REQUIRE(rb.ok);
+    const auto ra = run_thirty_iterations(name, values, ShiftedSphere(5, -5, 5, 0.7), 99);
+    const auto rb = run_thirty_iterations(name, values, RootOfSphere(5, -5, 5, 0.7), 99);
     REQUIRE(ra.trace_position == rb.trace_position);
     REQUIRE(rb.best_fitness == Approx(std::sqrt(ra.best_fitness)));
+}
+
+// Best fitness after `evaluations` on the 10-D sphere centred at 1.5 in [-5, 5]^10, for seeds 1, 2, 3:
+// each convergence test sets its bound from measurements over more seeds.
+inline std::vector<double> best_on_sphere(const std::string& name, const PluginValues& values,
+                                          std::int64_t evaluations) {
+    ShiftedSphere sphere(10, -5, 5, 1.5);
+    std::vector<double> best;
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        auto opt = make_optimizer(name, values);
+        const auto r = run_trial(*opt, sphere, {Budget{0, evaluations}, seed, false});
+        REQUIRE(r.ok);
+        best.push_back(r.best_fitness);
+    }
+    return best;
 }
 
 // The sphere's centre lies outside the box, beyond the corner (5, 5, 5), so the best point of the box
