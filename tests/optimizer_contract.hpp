@@ -1,7 +1,8 @@
 #pragma once
 // What every population-based optimiser plugin owes the framework, checked the same way for each:
-// it spends exactly its budget, a seed fixes the whole run, and it never hands the evaluator a point
-// outside the box (the evaluator would fail the trial).
+// it spends exactly its budget, a seed fixes the whole run, a comparison-based optimiser ignores a
+// monotone transformation of f, and it never hands the evaluator a point outside the box (the
+// evaluator would fail the trial). Also the shared runs for the convergence tests.
 #include <cmath>
 #include <map>
 #include <string>

@@ -9,7 +9,6 @@
 #include "tests/recording_problem.hpp"
 
 using namespace mhb;
-using testing::PluginValues;
 
 TEST_CASE("pso spends exactly its budget, a seed fixes the run, only ranks matter", "[pso]") {
     testing::check_exact_budgets("pso", {}, 30);
