@@ -66,8 +66,10 @@ public:
         const auto& u = fit_.uncertainty;
         std::string text = fmt::format("data {}: {} of {} samples", path_.string(), data_.size(), total_samples_);
         if (data_.has_segments()) text += fmt::format(" in {} segments", data_.segment_labels.size());
-        text += fmt::format("; fitness {}; axis noise d {:.3g} V, q {:.3g} V; least-squares optimum (95 % {}, lag {:.1f}):",
-                            to_string(fit_.fitness), fit_.axis_noise[0], fit_.axis_noise[1], to_string(u.method), u.lag);
+        text += fmt::format("; fitness {}; residual d {:.3g} V, q {:.3g} V (lag-1 correlation {:.2f}, {:.2f}); "
+                            "least-squares optimum, 95 % {}:",
+                            to_string(fit_.fitness), fit_.axis_noise[0], fit_.axis_noise[1], u.axis_rho[0], u.axis_rho[1],
+                            to_string(u.method));
         for (int j = 0; j < 4; ++j)
             text += fmt::format(" {} = {:.6g} ± {:.2g}", base_parameter_names[static_cast<std::size_t>(j)],
                                 fit_.least_squares.solution[j], u.critical_value * u.standard_error[j]);

@@ -171,8 +171,19 @@ ParameterUncertainty parameter_uncertainty(const Eigen::MatrixXd& phi, const Eig
     ParameterUncertainty u;
     u.method = method;
     u.axis_sigma.resize(layout.axes);
-    for (int a = 0; a < layout.axes; ++a)
-        u.axis_sigma[a] = std::sqrt(residual.segment(a * n, n).squaredNorm() / static_cast<double>(n));
+    u.axis_rho = Eigen::VectorXd::Zero(layout.axes);
+    const auto runs = block_runs(layout);
+    for (int a = 0; a < layout.axes; ++a) {
+        const auto r = residual.segment(a * n, n);
+        u.axis_sigma[a] = std::sqrt(r.squaredNorm() / static_cast<double>(n));
+        double sxy = 0.0, sxx = 0.0;
+        for (const auto& [b, e] : runs)
+            for (Eigen::Index t = b + 1; t < e; ++t) {
+                sxy += r[t] * r[t - 1];
+                sxx += r[t - 1] * r[t - 1];
+            }
+        u.axis_rho[a] = sxx > 0.0 ? std::clamp(sxy / sxx, -0.97, 0.97) : 0.0;
+    }
 
     Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(p, p);
     if (method == CovarianceMethod::White) {
@@ -182,11 +193,23 @@ ParameterUncertainty parameter_uncertainty(const Eigen::MatrixXd& phi, const Eig
         }
         u.critical_value = boost::math::quantile(boost::math::students_t(static_cast<double>(rows - p)), 0.975);
     } else {
-        // Scores per sample, all axes together, so correlation between axes is kept.
+        // Prewhitening (after Andrews & Monahan 1992), on each axis' residual series: an AR(1) fitted
+        // within blocks takes out most of the autocorrelation of closed-loop errors, and dividing the
+        // innovations by (1 - rho) recolours their sums. The whitened scores, all axes together so
+        // their correlation is kept, then get Newey-West weights. This assumes the regressors change
+        // slowly against the errors' correlation time, as at held operating points; plain Bartlett
+        // weights on strongly persistent errors underestimate the variance badly.
         Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(p, n);
-        for (int a = 0; a < layout.axes; ++a)
-            scores += (phi.middleRows(a * n, n).array().colwise() * residual.segment(a * n, n).array()).matrix().transpose();
-        const auto runs = block_runs(layout);
+        for (int a = 0; a < layout.axes; ++a) {
+            const auto r = residual.segment(a * n, n);
+            const double rho = u.axis_rho[a];
+            for (const auto& [b, e] : runs)
+                for (Eigen::Index t = b; t < e; ++t) {
+                    // Prais-Winsten first term, so the block's first innovation has the same variance.
+                    const double innovation = t == b ? std::sqrt(1.0 - rho * rho) * r[t] : r[t] - rho * r[t - 1];
+                    scores.col(t) += phi.row(a * n + t).transpose() * (innovation / (1.0 - rho));
+                }
+        }
         u.lag = andrews_bandwidth(scores, runs);
         for (const auto& [b, e] : runs) {
             const auto s = scores.middleCols(b, e - b);

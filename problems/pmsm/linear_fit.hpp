@@ -51,7 +51,8 @@ struct RowLayout {
 
 enum class CovarianceMethod {
     White,      // independent errors with one variance per axis: the Jacobian-and-residual formula
-    NeweyWest,  // heteroscedasticity and autocorrelation consistent (Bartlett kernel, Andrews bandwidth)
+    NeweyWest,  // autocorrelation consistent: AR(1) prewhitening of each axis' residuals within blocks,
+                // then Newey-West (Bartlett kernel, Andrews bandwidth) on the whitened scores
 };
 
 struct ParameterUncertainty {
@@ -60,8 +61,9 @@ struct ParameterUncertainty {
     Eigen::VectorXd standard_error;
     Eigen::VectorXd lower, upper;  // 95 % confidence interval
     double critical_value = 0.0;   // the t or z quantile used for the interval
-    double lag = 0.0;              // Newey-West bandwidth in samples (0 for White)
+    double lag = 0.0;              // Newey-West bandwidth in samples after prewhitening (0 for White)
     Eigen::VectorXd axis_sigma;    // residual standard deviation of each axis
+    Eigen::VectorXd axis_rho;      // lag-1 autocorrelation of each axis' residuals within blocks
 };
 
 // Uncertainty of `estimate` for the regression (phi, y). Throws std::invalid_argument when the
