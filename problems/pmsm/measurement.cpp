@@ -272,7 +272,8 @@ std::vector<Eigen::Index> settled_rows(const Measurement& m, double settle) {
     double start = 0.0;
     for (Eigen::Index k = 0; k < m.size(); ++k) {
         if (k == 0 || m.segment[k] != m.segment[k - 1]) start = t[k];
-        if (t[k] - start >= settle) rows.push_back(k);
+        // A nanosecond of slack: logged times are sums of periods and carry rounding.
+        if (t[k] - start >= settle - 1e-9) rows.push_back(k);
     }
     return rows;
 }
