@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <sstream>
 
 #include <fmt/format.h>
 
 #include "framework/input_error.hpp"
+#include "problems/pmsm/text_file.hpp"
 
 namespace mhb::pmsm {
 namespace {
@@ -62,11 +62,7 @@ Inductance FluxMap::incremental_inductance(Complex i) const {
 
 FluxMap FluxMap::read(const std::filesystem::path& path, double nominal_psi_f) {
     const std::string file = path.string();
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(file, 0, "", "cannot open the flux map");
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    const std::string text = buffer.str();
+    const std::string text = read_text_file(path, "flux map");
 
     // Same CSV conventions as measurements (header row, commas, SI units); the columns differ.
     std::vector<std::string> lines;

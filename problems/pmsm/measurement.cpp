@@ -4,11 +4,11 @@
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "framework/input_error.hpp"
+#include "problems/pmsm/text_file.hpp"
 
 namespace mhb::pmsm {
 namespace {
@@ -173,11 +173,7 @@ Measurement parse_measurement(const std::string& text, const std::string& source
 }
 
 Measurement read_measurement(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path.string(), 0, "", "cannot open the measurement file");
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    return parse_measurement(buffer.str(), path.string());
+    return parse_measurement(read_text_file(path, "measurement file"), path.string());
 }
 
 std::string format_measurement(const Measurement& m) {

@@ -4,13 +4,13 @@
 #include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include "framework/input_error.hpp"
 #include "problems/pmsm/steady_state_model.hpp"
+#include "problems/pmsm/text_file.hpp"
 
 namespace mhb::pmsm {
 namespace {
@@ -304,11 +304,7 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
 }
 
 DriveSimulation read_simulation_profile(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path.string(), 0, "", "cannot open the simulation profile");
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    return parse_simulation_profile(buffer.str(), path.string(), path.parent_path());
+    return parse_simulation_profile(read_text_file(path, "simulation profile"), path.string(), path.parent_path());
 }
 
 std::filesystem::path sidecar_path(const std::filesystem::path& csv) {
@@ -386,11 +382,8 @@ void write_simulation(const std::filesystem::path& csv, const DriveSimulation& s
 
 std::optional<Eigen::Vector4d> read_sidecar_truth(const std::filesystem::path& csv) {
     const auto path = sidecar_path(csv);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return std::nullopt;
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    const std::string text = buffer.str();
+    if (!std::filesystem::exists(path)) return std::nullopt;
+    const std::string text = read_text_file(path, "sidecar");
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
