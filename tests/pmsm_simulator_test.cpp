@@ -197,6 +197,13 @@ TEST_CASE("effect residual signatures match reference/pmsm.md", "[pmsm][simulato
         // i_d = 0, so the fundamental is all on q.
         CHECK(r.tail(m).mean() == Approx(4.0 / std::numbers::pi * 0.28).epsilon(0.02));
         CHECK(std::abs(r.head(m).mean()) < 0.02 * 0.28);
+        // Without the angle the model side uses that fundamental, right on average over the periods.
+        Measurement no_angle = data;
+        no_angle.theta_e.reset();
+        SteadyStateModel mean_form(no_angle, effects_of("deadtime", {{"voltage", 0.28}}));
+        const Eigen::VectorXd left = model_residual(mean_form, mean_form.parameters_of(motor));
+        CHECK(std::abs(left.tail(m).mean()) < 0.02 * 0.28);
+        CHECK(std::abs(left.head(m).mean()) < 0.02 * 0.28);
     }
 }
 

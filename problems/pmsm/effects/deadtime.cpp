@@ -41,10 +41,13 @@ public:
             return;
         }
         // Without the angle only the fundamental is known: (4/pi) V_dt along the current.
-        const Eigen::ArrayXd magnitude = (s.i_d.square() + s.i_q.square()).sqrt();
         const double gain = 4.0 / std::numbers::pi * p[0];
-        s.u_d += (magnitude > 0.0).select(gain * s.i_d / magnitude, 0.0);
-        s.u_q += (magnitude > 0.0).select(gain * s.i_q / magnitude, 0.0);
+        for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+            const double magnitude = std::hypot(s.i_d[k], s.i_q[k]);
+            if (magnitude == 0.0) continue;
+            s.u_d[k] += gain * s.i_d[k] / magnitude;
+            s.u_q[k] += gain * s.i_q[k] / magnitude;
+        }
     }
 };
 

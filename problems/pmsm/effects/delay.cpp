@@ -15,10 +15,11 @@ public:
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Delay); }
     void model(ModelStage, const double* p, ModelState& s) const override {
-        const Eigen::ArrayXd c = (s.omega * p[0]).cos(), sn = (s.omega * p[0]).sin();
-        const Eigen::ArrayXd d = c * s.u_d - sn * s.u_q;
-        s.u_q = sn * s.u_d + c * s.u_q;
-        s.u_d = d;
+        for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+            const Complex u = std::polar(1.0, s.omega[k] * p[0]) * Complex{s.u_d[k], s.u_q[k]};
+            s.u_d[k] = u.real();
+            s.u_q[k] = u.imag();
+        }
     }
 };
 

@@ -7,10 +7,12 @@ namespace mhb::pmsm {
 namespace {
 
 void rotate(Eigen::ArrayXd& d, Eigen::ArrayXd& q, double angle) {
-    const double c = std::cos(angle), s = std::sin(angle);
-    const Eigen::ArrayXd new_d = c * d - s * q;
-    q = s * d + c * q;
-    d = new_d;
+    const Complex turn = std::polar(1.0, angle);
+    for (Eigen::Index k = 0; k < d.size(); ++k) {
+        const Complex v = turn * Complex{d[k], q[k]};
+        d[k] = v.real();
+        q[k] = v.imag();
+    }
 }
 
 class EncoderOffset final : public Effect {
