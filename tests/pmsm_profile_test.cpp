@@ -212,3 +212,21 @@ TEST_CASE("a sidecar that is not JSON is refused with its line", "[pmsm][profile
     CHECK_FALSE(read_sidecar_truth(csv).has_value());
     std::filesystem::remove(sidecar_path(csv));
 }
+
+TEST_CASE("the flux-map profile drives the measured machine from the shared data", "[pmsm][profile]") {
+    const auto spec = read_simulation_profile(experiments / "flux_map_profile.toml");
+    REQUIRE(spec.effects.size() == 1);
+    CHECK(spec.effects[0]->name() == "saturation");
+    const auto result = simulate(spec);
+    CHECK(result.data.size() == 700);
+    CHECK(result.data.i_q.cwiseAbs().maxCoeff() > 10.0);  // well into saturation
+    const auto path = std::filesystem::temp_directory_path() / "mhbench_flux_map_profile.csv";
+    write_simulation(path, spec, result, "flux_map_profile.toml");
+    // A flux map has no single Ld, Lq: the sidecar says so instead of giving true parameters.
+    CHECK_FALSE(read_sidecar_truth(path).has_value());
+    std::ifstream in(sidecar_path(path));
+    const auto j = nlohmann::json::parse(in);
+    CHECK(j.contains("true_parameters_note"));
+    std::filesystem::remove(path);
+    std::filesystem::remove(sidecar_path(path));
+}
