@@ -1,0 +1,38 @@
+// Current-sensor offsets on phases a and b (phase c is computed as -a - b, as in most drives). The
+// measured alpha-beta current carries the constant (o_a, (o_a + 2 o_b)/sqrt 3); in the rotating frame
+// that is a ripple at the electrical frequency, which the current loop imposes on the true currents.
+#include "problems/pmsm/effects/effect.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+Complex alpha_beta_offset(double offset_a, double offset_b) {
+    return {offset_a, (offset_a + 2.0 * offset_b) / std::numbers::sqrt3};
+}
+
+class CurrentOffset final : public Effect {
+public:
+    explicit CurrentOffset(const ParameterSet& p) : Effect("current_offset", p) {}
+
+    Complex plant_current_sensor_offset() const override { return alpha_beta_offset(values()[0], values()[1]); }
+
+    unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::SensorCurrents); }
+    std::vector<std::string> model_columns() const override { return {"theta_e"}; }
+    void model(ModelStage, const double* p, ModelState& s) const override {
+        // The logged angle is the controller's, the frame the offset was measured in.
+        const Complex o = alpha_beta_offset(p[0], p[1]);
+        s.i_d -= o.real() * s.theta.cos() + o.imag() * s.theta.sin();
+        s.i_q -= -o.real() * s.theta.sin() + o.imag() * s.theta.cos();
+    }
+};
+
+const bool registered = register_effect({
+    "current_offset",
+    "Offsets of the phase a and b current sensors (needs theta_e)",
+    {ParameterSpec::real("offset_a", 0.001, -0.5, 0.5, "offset of the phase a current sensor", "A"),
+     ParameterSpec::real("offset_b", 0.0, -0.5, 0.5, "offset of the phase b current sensor", "A")},
+    [](const ParameterSet& p) { return std::make_unique<CurrentOffset>(p); },
+});
+
+}  // namespace
+}  // namespace mhb::pmsm

@@ -1,0 +1,64 @@
+// Inverter dead time and device voltage drop. Each phase loses V_dt in the direction of its current,
+// V_dt = t_dead f_sw V_dc + V_device; near zero current the loss is taken as linear over a band
+// (the current ripple and snubber charge make it so). In dq this is (4/pi) V_dt i/|i| plus a 6 omega
+// ripple: an "extra resistance" that is largest at small current.
+#include <algorithm>
+
+#include "problems/pmsm/effects/effect.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+double phase_sign(double i, double band) {
+    if (band > 0.0) return std::clamp(i / band, -1.0, 1.0);
+    return i > 0.0 ? 1.0 : (i < 0.0 ? -1.0 : 0.0);
+}
+
+// Voltage lost at the terminals, rotor frame, from the three phase currents.
+Complex terminal_loss(double voltage, double band, double theta, Complex i_dq) {
+    const auto phase = inverse_clarke(inverse_park(i_dq, theta));
+    return park(clarke(voltage * phase_sign(phase[0], band), voltage * phase_sign(phase[1], band),
+                       voltage * phase_sign(phase[2], band)),
+                theta);
+}
+
+class DeadTime final : public Effect {
+public:
+    explicit DeadTime(const ParameterSet& p) : Effect("deadtime", p) {}
+
+    Complex plant_inverter_loss(double theta, Complex i) const override {
+        return terminal_loss(values()[0], values()[1], theta, i);
+    }
+
+    unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
+    void model(ModelStage, const double* p, ModelState& s) const override {
+        if (s.theta.size() > 0) {
+            for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+                const Complex loss = terminal_loss(p[0], p[1], s.theta[k], {s.i_d[k], s.i_q[k]});
+                s.u_d[k] += loss.real();
+                s.u_q[k] += loss.imag();
+            }
+            return;
+        }
+        // Without the angle only the fundamental is known: (4/pi) V_dt along the current.
+        const double gain = 4.0 / std::numbers::pi * p[0];
+        for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+            const double magnitude = std::hypot(s.i_d[k], s.i_q[k]);
+            if (magnitude == 0.0) continue;
+            s.u_d[k] += gain * s.i_d[k] / magnitude;
+            s.u_q[k] += gain * s.i_q[k] / magnitude;
+        }
+    }
+};
+
+const bool registered = register_effect({
+    "deadtime",
+    "Inverter dead time and device drop: each phase loses V_dt against its current",
+    {ParameterSpec::real("voltage", 0.28, 0.0, 10.0, "per-phase voltage error t_dead f_sw V_dc + V_device", "V"),
+     ParameterSpec::real("current_band", 0.0, 0.0, 10.0,
+                         "phase current over which the error ramps linearly through zero (0: a sign)", "A")},
+    [](const ParameterSet& p) { return std::make_unique<DeadTime>(p); },
+});
+
+}  // namespace
+}  // namespace mhb::pmsm

@@ -1,0 +1,34 @@
+// Computation and PWM delay: the inverter applies the controller's rotating voltage vector tau late
+// (one period of computation plus half a period of PWM hold: tau = 1.5 T_s is usual). In steady state
+// the applied vector is the command rotated back by omega tau, so the logged command is
+// e^{j omega tau} times what the machine needs: Delta u_d ~ -omega tau u_q, Delta u_q ~ +omega tau u_d.
+#include "problems/pmsm/effects/effect.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+class Delay final : public Effect {
+public:
+    explicit Delay(const ParameterSet& p) : Effect("delay", p) {}
+
+    double plant_delay() const override { return values()[0]; }
+
+    unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Delay); }
+    void model(ModelStage, const double* p, ModelState& s) const override {
+        for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+            const Complex u = std::polar(1.0, s.omega[k] * p[0]) * Complex{s.u_d[k], s.u_q[k]};
+            s.u_d[k] = u.real();
+            s.u_q[k] = u.imag();
+        }
+    }
+};
+
+const bool registered = register_effect({
+    "delay",
+    "Computation and PWM delay between the voltage reference and the inverter output",
+    {ParameterSpec::real("tau", 1.5e-4, 0.0, 1e-3, "delay of the applied voltage vector", "s")},
+    [](const ParameterSet& p) { return std::make_unique<Delay>(p); },
+});
+
+}  // namespace
+}  // namespace mhb::pmsm

@@ -1,0 +1,41 @@
+#include "problems/pmsm/effects/effect.hpp"
+
+#include <fmt/format.h>
+
+#include "framework/input_error.hpp"
+
+namespace mhb::pmsm {
+
+void ModelState::resize(Eigen::Index n) {
+    for (auto* a : {&i_d, &i_q, &omega, &rs, &psi_f, &psi_d, &psi_q, &u_d, &u_q}) a->resize(n);
+    theta.resize(data && data->theta_e ? n : 0);
+}
+
+Effect::Effect(std::string name, const ParameterSet& settings) : name_(std::move(name)), settings_(settings) {
+    specs_ = EffectRegistry::instance().at(name_, "effect").parameters;
+    for (const auto& s : specs_)
+        if (s.type == ParameterType::Real) parameter_names_.push_back(s.name);
+    values_.resize(static_cast<Eigen::Index>(parameter_names_.size()));
+    for (std::size_t k = 0; k < parameter_names_.size(); ++k)
+        values_[static_cast<Eigen::Index>(k)] = settings_.real(parameter_names_[k]);
+}
+
+std::unique_ptr<Effect> make_effect(const std::string& name, const std::map<std::string, ParameterValue>& values) {
+    const auto& entry = EffectRegistry::instance().at(name, "effect");
+    return entry.create(ParameterSet(entry.parameters, values));
+}
+
+void require_columns(const Effect& effect, const Measurement& data) {
+    for (const auto& column : effect.model_columns()) {
+        const bool present = column == "theta_e"        ? data.theta_e.has_value()
+                             : column == "temp_winding" ? data.temp_winding.has_value()
+                             : column == "temp_magnet"  ? data.temp_magnet.has_value()
+                             : column == "t"            ? data.t.has_value()
+                                                        : true;
+        if (!present)
+            throw InputError(data.source, 0, column,
+                             fmt::format("the {} effect needs this column, which the data lack", effect.name()));
+    }
+}
+
+}  // namespace mhb::pmsm

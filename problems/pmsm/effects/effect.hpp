@@ -1,0 +1,136 @@
+#pragma once
+// A physical effect missing from the base PMSM model (seed eq. 2), defined once for both sides:
+//   - the plant side: where it acts in the simulated drive (inverter output, sensors, machine
+//     coefficients, flux linkage), used by the drive simulator;
+//   - the model side: its steady-state contribution to the logged reference voltages u_d, u_q, used
+//     when fitting (it may be nonlinear in its parameters and may rescale base parameters).
+// Each effect is one .cpp under problems/pmsm/effects/ that registers itself:
+//
+//   namespace { const bool registered = mhb::pmsm::register_effect({
+//       "deadtime", "Inverter dead time and device drop", {ParameterSpec::real("voltage", ...)},
+//       [](const ParameterSet& p) { return std::make_unique<DeadTime>(p); }}); }
+//
+// Real parameters (in declaration order) are what a fit varies; their declared range is the
+// physically plausible range and doubles as the search box. Text parameters configure the plant only.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "framework/parameters.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/machine.hpp"
+#include "problems/pmsm/measurement.hpp"
+
+namespace mhb::pmsm {
+
+// The steady-state model evaluated over all samples at once. It starts from the logged data and
+// walks the physical chain outward to the logged voltage; each stage is a place where effects act.
+//   SensorCurrents  measured currents -> currents the sensors really saw (controller frame)
+//   SensorAngle     controller frame -> true rotor frame (currents and angle)
+//   Coefficients    per-sample resistance and magnet flux (temperatures)
+//   FluxLinkage     flux linkages from currents (after psi_d = Ld i_d + psi_f, psi_q = Lq i_q)
+//   MachineVoltage  extra machine voltage (after u = rs i + j omega psi)
+//   InverterError   what the inverter loses between command and terminals (true frame)
+//   ControllerFrame true rotor frame -> controller frame (voltage)
+//   Delay           applied voltage -> the earlier command that produced it
+//   LoggedVoltage   command -> logged reference
+enum class ModelStage : unsigned {
+    SensorCurrents = 1u << 0,
+    SensorAngle = 1u << 1,
+    Coefficients = 1u << 2,
+    FluxLinkage = 1u << 3,
+    MachineVoltage = 1u << 4,
+    InverterError = 1u << 5,
+    ControllerFrame = 1u << 6,
+    Delay = 1u << 7,
+    LoggedVoltage = 1u << 8,
+};
+constexpr unsigned operator|(ModelStage a, ModelStage b) { return static_cast<unsigned>(a) | static_cast<unsigned>(b); }
+constexpr unsigned operator|(unsigned a, ModelStage b) { return a | static_cast<unsigned>(b); }
+constexpr bool acts_in(unsigned stages, ModelStage s) { return (stages & static_cast<unsigned>(s)) != 0; }
+
+// Per-sample quantities of the steady-state model; arrays are preallocated to the sample count.
+struct ModelState {
+    const Measurement* data = nullptr;  // temperatures and the logged angle, when present
+    Eigen::ArrayXd i_d, i_q;            // A: measured (controller frame), then true (rotor frame)
+    Eigen::ArrayXd theta;               // rad: logged angle, then true angle (empty without theta_e)
+    Eigen::ArrayXd omega;               // rad/s electrical
+    Eigen::ArrayXd rs, psi_f;           // Ω, Wb per sample
+    Eigen::ArrayXd psi_d, psi_q;        // Wb
+    Eigen::ArrayXd u_d, u_q;            // V: machine terminal voltage, then command, then logged
+
+    void resize(Eigen::Index n);
+};
+
+// What the plant knows at an instant, for effects that depend on operating conditions.
+struct PlantConditions {
+    double temp_winding = reference_temperature;  // °C
+    double temp_magnet = reference_temperature;   // °C
+};
+
+class Effect {
+public:
+    Effect(std::string name, const ParameterSet& settings);
+    virtual ~Effect() = default;
+
+    const std::string& name() const { return name_; }
+    // Real parameters in declaration order: the plant uses these values, a fit varies them.
+    const std::vector<std::string>& parameter_names() const { return parameter_names_; }
+    const Eigen::VectorXd& values() const { return values_; }
+    const std::vector<ParameterSpec>& parameter_specs() const { return specs_; }
+    const ParameterSet& settings() const { return settings_; }
+
+    // ---- plant side: defaults do nothing ----
+    // Measured electrical angle minus the true one (rad).
+    virtual double plant_angle_offset() const { return 0.0; }
+    // Alpha-beta current added by the current sensors to what they measure (A).
+    virtual Complex plant_current_sensor_offset() const { return {}; }
+    // Time from the controller's reference to the inverter output (s).
+    virtual double plant_delay() const { return 0.0; }
+    // Controller-frame voltage by which the inverter's input falls short of the logged reference (V).
+    virtual Complex plant_command_shortfall() const { return {}; }
+    // Resistance and magnet flux under the present conditions (called with nominal values first).
+    virtual void plant_coefficients(const PlantConditions&, double& /*rs*/, double& /*psi_f*/) const {}
+    // A flux model replacing the linear one (nullptr: keep it). Paths resolve against base_directory.
+    virtual std::unique_ptr<FluxModel> plant_flux_model(const MotorParameters&,
+                                                        const std::filesystem::path& /*base_directory*/) const {
+        return nullptr;
+    }
+    // Angle-dependent part of the magnet flux (rotor frame, Wb) and its back-EMF per unit speed,
+    // (d/dtheta + j) of it (V s/rad), which the plant also needs for the torque.
+    virtual Complex plant_flux_ripple(double /*theta_e*/, double /*psi_f*/) const { return {}; }
+    virtual Complex plant_emf_ripple(double /*theta_e*/, double /*psi_f*/) const { return {}; }
+    // Voltage the inverter loses at its terminals, rotor frame, given the true angle and currents (V).
+    virtual Complex plant_inverter_loss(double /*theta_e*/, Complex /*i_dq*/) const { return {}; }
+
+    // ---- model side ----
+    // Stages this effect acts in (ModelStage bits) and the optional data columns it needs.
+    virtual unsigned model_stages() const { return 0; }
+    virtual std::vector<std::string> model_columns() const { return {}; }
+    // Applies the effect at `stage` with parameters p (this effect's real parameters, in order).
+    virtual void model(ModelStage /*stage*/, const double* /*p*/, ModelState& /*state*/) const {}
+
+private:
+    std::string name_;
+    ParameterSet settings_;
+    std::vector<ParameterSpec> specs_;
+    std::vector<std::string> parameter_names_;
+    Eigen::VectorXd values_;
+};
+
+using EffectFactory = std::function<std::unique_ptr<Effect>(const ParameterSet&)>;
+using EffectRegistry = Registry<EffectFactory>;
+
+inline bool register_effect(PluginEntry<EffectFactory> entry) { return EffectRegistry::instance().add(std::move(entry)); }
+
+// Creates a registered effect with user values (ParameterError on bad values, UnknownPlugin on a
+// name that is not registered).
+std::unique_ptr<Effect> make_effect(const std::string& name, const std::map<std::string, ParameterValue>& values = {});
+
+// Throws InputError when `data` lacks a column the effect's model side needs.
+void require_columns(const Effect& effect, const Measurement& data);
+
+}  // namespace mhb::pmsm

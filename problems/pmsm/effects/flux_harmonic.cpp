@@ -1,0 +1,50 @@
+// Spatial harmonics of the magnet flux. Phase a carries psi_f [cos theta + h5 cos(5 theta + phi5)
+// + h7 cos(7 theta + phi7)] (b, c shifted by 2 pi/3); the 5th is a negative and the 7th a positive
+// sequence, so in the rotor frame both become a 6th harmonic:
+//   psi_r = psi_f [h5 e^{-j(6 theta + phi5)} + h7 e^{j(6 theta + phi7)}],
+//   back-EMF  d psi_r/dt + j omega psi_r = j omega psi_f [-5 h5 e^{-j(6 theta + phi5)} + 7 h7 e^{j(6 theta + phi7)}].
+#include "problems/pmsm/effects/effect.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+Complex ripple_flux(const double* p, double theta, double psi_f) {
+    return psi_f * (p[0] * std::polar(1.0, -(6.0 * theta + p[1])) + p[2] * std::polar(1.0, 6.0 * theta + p[3]));
+}
+
+// Back-EMF of the ripple per unit electrical speed (V s/rad).
+Complex ripple_emf(const double* p, double theta, double psi_f) {
+    return Complex{0.0, psi_f} *
+           (-5.0 * p[0] * std::polar(1.0, -(6.0 * theta + p[1])) + 7.0 * p[2] * std::polar(1.0, 6.0 * theta + p[3]));
+}
+
+class FluxHarmonic final : public Effect {
+public:
+    explicit FluxHarmonic(const ParameterSet& p) : Effect("flux_harmonic", p) {}
+
+    Complex plant_flux_ripple(double theta, double psi_f) const override { return ripple_flux(values().data(), theta, psi_f); }
+    Complex plant_emf_ripple(double theta, double psi_f) const override { return ripple_emf(values().data(), theta, psi_f); }
+
+    unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::MachineVoltage); }
+    std::vector<std::string> model_columns() const override { return {"theta_e"}; }
+    void model(ModelStage, const double* p, ModelState& s) const override {
+        for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+            const Complex e = s.omega[k] * ripple_emf(p, s.theta[k], s.psi_f[k]);
+            s.u_d[k] += e.real();
+            s.u_q[k] += e.imag();
+        }
+    }
+};
+
+const bool registered = register_effect({
+    "flux_harmonic",
+    "5th and 7th spatial harmonics of the magnet flux: a 6th-harmonic back-EMF in dq (needs theta_e)",
+    {ParameterSpec::real("h5", 0.01, 0.0, 0.1, "5th-harmonic flux relative to psi_f", "1"),
+     ParameterSpec::real("phi5", 0.0, -std::numbers::pi, std::numbers::pi, "phase of the 5th harmonic", "rad"),
+     ParameterSpec::real("h7", 0.005, 0.0, 0.1, "7th-harmonic flux relative to psi_f", "1"),
+     ParameterSpec::real("phi7", 0.0, -std::numbers::pi, std::numbers::pi, "phase of the 7th harmonic", "rad")},
+    [](const ParameterSet& p) { return std::make_unique<FluxHarmonic>(p); },
+});
+
+}  // namespace
+}  // namespace mhb::pmsm

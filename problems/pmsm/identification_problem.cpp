@@ -1,0 +1,103 @@
+// Problem `pmsm_identification`: the seed's electrical-parameter identification (its eq. 6 and
+// Table 2) fitted to a measurement file. The fitness is a quadratic in (Rs, Ld, Lq, psi_f), so a
+// whole population is evaluated from precomputed least-squares statistics at O(1) per candidate, and
+// the exact optimum is known (docs/pmsm.md).
+#include <filesystem>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/base_model_fit.hpp"
+#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/steady_state_model.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+class PmsmIdentification final : public Problem {
+public:
+    PmsmIdentification(const ParameterSet& p, const ProblemContext& context) {
+        const std::string& data = p.text("data");
+        if (data.empty()) throw ParameterError("data", "required: the measurement CSV to fit (docs/data-format.md)");
+        path_ = std::filesystem::path(data).is_absolute() ? std::filesystem::path(data) : context.base_directory / data;
+        const Measurement all = read_measurement(path_);
+        const auto rows = settled_rows(all, p.real("settle"));
+        if (rows.size() < 3)
+            throw InputError(path_.string(), 0, "settle",
+                             fmt::format("dropping {} s after each segment start leaves {} samples; at least 3 are needed",
+                                         p.real("settle"), rows.size()));
+        data_ = select_rows(all, rows);
+        total_samples_ = all.size();
+        const CovarianceMethod method = p.text("uncertainty") == "white" ? CovarianceMethod::White : CovarianceMethod::NeweyWest;
+        fit_ = fit_base_model(data_, parse_fitness(p.text("fitness")), method);
+
+        const Bounds box = base_parameter_bounds();
+        set_domain(box.lower, box.upper, base_parameter_names);
+        if (auto truth = read_sidecar_truth(path_)) truth_.true_parameters = Vector(*truth);
+        truth_.reference_solution = fit_.in_bounds.solution;
+        truth_.reference_fitness = fit_.in_bounds.rss / static_cast<double>(fit_.samples);
+        truth_.optimum_value = truth_.reference_fitness;
+        truth_.reference_label = "least-squares optimum";
+        if (fit_.in_bounds.any_bound_active()) {
+            std::string active;
+            for (std::size_t j = 0; j < 4; ++j)
+                if (fit_.in_bounds.at_bound[j] != 0)
+                    active += fmt::format("{}{} at its {} bound", active.empty() ? "" : ", ", base_parameter_names[j],
+                                          fit_.in_bounds.at_bound[j] < 0 ? "lower" : "upper");
+            truth_.reference_label += " (inside Table 2's box: " + active + ")";
+        }
+
+        gram_ = fit_.least_squares.gram;
+        centre_ = fit_.least_squares.solution;
+        scale_ = 1.0 / static_cast<double>(fit_.samples);
+        rss_ = fit_.least_squares.rss;
+    }
+
+    void evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) const override {
+        for (Eigen::Index j = 0; j < x.cols(); ++j) {
+            const Eigen::Vector4d d = x.col(j) - centre_;
+            f[j] = (rss_ + d.dot(gram_ * d)) * scale_;
+        }
+    }
+
+    std::string describe() const override {
+        const auto& u = fit_.uncertainty;
+        std::string text = fmt::format("data {}: {} of {} samples", path_.string(), data_.size(), total_samples_);
+        if (data_.has_segments()) text += fmt::format(" in {} segments", data_.segment_labels.size());
+        text += fmt::format("; fitness {}; residual d {:.3g} V, q {:.3g} V (lag-1 correlation {:.2f}, {:.2f}); "
+                            "least-squares optimum, 95 % {}:",
+                            to_string(fit_.fitness), fit_.axis_noise[0], fit_.axis_noise[1], u.axis_rho[0], u.axis_rho[1],
+                            to_string(u.method));
+        for (int j = 0; j < 4; ++j)
+            text += fmt::format(" {} = {:.6g} ± {:.2g}", base_parameter_names[static_cast<std::size_t>(j)],
+                                fit_.least_squares.solution[j], u.critical_value * u.standard_error[j]);
+        for (const auto& w : data_.warnings) text += "; " + w;
+        return text;
+    }
+
+private:
+    std::filesystem::path path_;
+    Measurement data_;
+    Eigen::Index total_samples_ = 0;
+    BaseModelFit fit_;
+    Eigen::Matrix4d gram_;
+    Eigen::Vector4d centre_;
+    double scale_ = 1.0, rss_ = 0.0;
+};
+
+const bool registered = register_problem({
+    "pmsm_identification",
+    "PMSM electrical parameters (Rs, Ld, Lq, psi_f) from drive data, seed eq. (6), box of Table 2",
+    {ParameterSpec::text("data", "", "measurement CSV (docs/data-format.md), relative to the experiment file"),
+     ParameterSpec::choice("fitness", "mse", {"mse", "noise_weighted"},
+                           "mean squared dq-voltage error, or each axis divided by its LS residual variance"),
+     ParameterSpec::real("settle", 0.0, 0.0, 1e6, "drop samples this long after each segment start (needs t, segment)", "s"),
+     ParameterSpec::choice("uncertainty", "newey_west", {"newey_west", "white"},
+                           "covariance of the reported least-squares optimum (serially correlated or white errors)")},
+    [](const ParameterSet& p, const ProblemContext& c) { return std::make_unique<PmsmIdentification>(p, c); },
+});
+
+}  // namespace
+}  // namespace mhb::pmsm

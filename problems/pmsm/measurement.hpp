@@ -1,0 +1,58 @@
+#pragma once
+// A drive measurement: one row per logged sample, one column per signal, SI units, temperatures in °C.
+// The same format holds simulated and real data (docs/data-format.md). Columns are stored as Eigen
+// vectors so model evaluations run vectorised over samples.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace mhb::pmsm {
+
+struct Measurement {
+    std::string source;  // file the data came from (for messages), empty when built in memory
+
+    // Required: controller-frame currents (A), reference voltages (V), electrical speed (rad/s).
+    Eigen::VectorXd i_d, i_q, u_d, u_q, omega_e;
+    // Optional: time (s), controller's electrical angle (rad), winding and magnet temperatures (°C).
+    std::optional<Eigen::VectorXd> t, theta_e, temp_winding, temp_magnet;
+    // Optional operating-point label per row: segment[k] indexes segment_labels (labels in order of
+    // first appearance). Both empty when the file has no segment column.
+    std::vector<std::string> segment_labels;
+    Eigen::VectorXi segment;
+
+    // What the reader noticed but accepted (ignored columns, skipped blank lines).
+    std::vector<std::string> warnings;
+
+    Eigen::Index size() const { return i_d.size(); }
+    bool has_segments() const { return !segment_labels.empty(); }
+    // Resizes every present column (required ones always) to n rows.
+    void resize(Eigen::Index n);
+};
+
+// Names of the columns, in the order the writer emits them.
+inline constexpr const char* required_columns[] = {"i_d", "i_q", "u_d", "u_q", "omega_e"};
+inline constexpr const char* optional_columns[] = {"t", "segment", "theta_e", "temp_winding", "temp_magnet"};
+
+// Reads a measurement CSV. Throws mhb::InputError (file, line, column) on a missing required column,
+// a duplicate column, a non-numeric or non-finite value, a row with the wrong number of fields, an
+// empty label, or a file without data rows. Unknown columns are ignored with a warning.
+Measurement read_measurement(const std::filesystem::path& path);
+// Parses CSV text; `source` names it in error messages.
+Measurement parse_measurement(const std::string& text, const std::string& source);
+
+// Writes the present columns with a header; numbers in shortest round-trip form, so reading the file
+// back gives the same doubles.
+void write_measurement(const std::filesystem::path& path, const Measurement& m);
+std::string format_measurement(const Measurement& m);
+
+// The rows listed in `rows` (in that order), with segment labels renumbered.
+Measurement select_rows(const Measurement& m, const std::vector<Eigen::Index>& rows);
+
+// Rows to keep when dropping the first `settle` seconds after every segment start (the first row and
+// each row whose segment differs from the previous row's). Needs the t and segment columns.
+std::vector<Eigen::Index> settled_rows(const Measurement& m, double settle);
+
+}  // namespace mhb::pmsm

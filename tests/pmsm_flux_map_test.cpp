@@ -1,0 +1,190 @@
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "framework/input_error.hpp"
+#include "framework/random.hpp"
+#include "problems/pmsm/flux_map.hpp"
+#include "problems/pmsm/linear_fit.hpp"
+#include "tests/pmsm_fixture.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+using namespace mhb::pmsm::testing;
+
+namespace {
+
+const std::filesystem::path map_path = std::filesystem::path(MHBENCH_SHARED_DIR) / "data" / "motulator_baldor_pmsyrm_400rpm_fluxmap.csv";
+
+// The map's rows read independently of FluxMap: (i_d, i_q) -> (psi_d, psi_q).
+std::map<std::pair<double, double>, std::pair<double, double>> raw_map() {
+    std::ifstream in(map_path);
+    std::string line;
+    std::getline(in, line);
+    std::map<std::pair<double, double>, std::pair<double, double>> rows;
+    while (std::getline(in, line)) {
+        std::replace(line.begin(), line.end(), ',', ' ');
+        std::istringstream s(line);
+        double id, iq, pd, pq;
+        s >> id >> iq >> pd >> pq;
+        rows[{id + 0.0, iq + 0.0}] = {pd, pq};
+    }
+    return rows;
+}
+
+// The Baldor machine of the map (2 pole pairs, 0.63 Ω) on a stiff shaft, controller tuned with its
+// small-signal inductances; the plant is the measured map.
+DriveSimulation baldor_drive(std::vector<Segment> segments) {
+    DriveSimulation d;
+    d.motor = {0.63, 0.031, 0.141, 0.444, 2};
+    d.mechanics = {0.015, 0.0, 1.0, 0.0};
+    d.control.dc_voltage = 540.0;
+    d.control.current_limit = 20.0;
+    d.segments = std::move(segments);
+    d.base_directory = map_path.parent_path();
+    d.effects.push_back(make_effect("saturation", {{"flux_map", map_path.filename().string()}}));
+    return d;
+}
+
+// Columns of a model that is linear in its parameters: the prediction for each unit vector.
+Eigen::MatrixXd linear_columns(const SteadyStateModel& model) {
+    const Eigen::Index n = model.data().size(), p = model.parameter_count();
+    Eigen::MatrixXd phi(2 * n, p);
+    ModelState s = model.make_state();
+    for (Eigen::Index j = 0; j < p; ++j) {
+        const Eigen::VectorXd unit = Eigen::VectorXd::Unit(p, j);
+        model.predict(unit.data(), s);
+        phi.col(j) << s.u_d.matrix(), s.u_q.matrix();
+    }
+    return phi;
+}
+
+}  // namespace
+
+TEST_CASE("the flux map reproduces its grid, interpolates bilinearly and inverts", "[pmsm][flux_map]") {
+    const auto raw = raw_map();
+    REQUIRE(raw.size() == 567);
+    const FluxMap map = FluxMap::read(map_path, 1.0);
+    CHECK(map.i_d_grid().size() == 21);
+    CHECK(map.i_q_grid().size() == 27);
+    for (const auto& [i, psi] : raw) {
+        const Complex f = map.flux({i.first, i.second}, 1.0);
+        CHECK(f.real() == psi.first);
+        CHECK(f.imag() == psi.second);
+    }
+    CHECK(map.magnet_flux() == raw.at({0.0, 0.0}).first);
+    // Inside a cell the interpolant is bilinear: its centre is the mean of the four corners.
+    const Complex centre = map.flux({-3.0, 5.0}, 1.0);
+    const auto& a = raw.at({-4.0, 4.0});
+    const auto& b = raw.at({-2.0, 4.0});
+    const auto& c = raw.at({-4.0, 6.0});
+    const auto& d = raw.at({-2.0, 6.0});
+    CHECK(centre.real() == Approx((a.first + b.first + c.first + d.first) / 4).epsilon(1e-14));
+    CHECK(centre.imag() == Approx((a.second + b.second + c.second + d.second) / 4).epsilon(1e-14));
+    // A cooler or hotter magnet scales the map's own magnet flux.
+    CHECK(map.flux({0.0, 0.0}, 0.9).real() == Approx(0.9 * map.magnet_flux()).epsilon(1e-14));
+    // Beyond the grid the edge cell extends linearly.
+    const Complex edge = map.flux({20.0, 0.0}, 1.0), beyond = map.flux({22.0, 0.0}, 1.0);
+    const Complex inner = map.flux({18.0, 0.0}, 1.0);
+    CHECK((beyond - edge).real() == Approx((edge - inner).real()).epsilon(1e-12));
+    // The current for a flux linkage, from a poor starting guess.
+    Rng rng(3);
+    for (int k = 0; k < 200; ++k) {
+        const Complex i{rng.uniform(-19.0, 19.0), rng.uniform(-25.0, 25.0)};
+        const Complex back = map.current(map.flux(i, 1.0), 1.0, {0.0, 0.0});
+        CHECK(std::abs(back - i) < 1e-9);
+    }
+}
+
+TEST_CASE("a malformed flux map is refused with its line", "[pmsm][flux_map]") {
+    const auto path = std::filesystem::temp_directory_path() / "mhbench_bad_fluxmap.csv";
+    auto refusal = [&](const std::string& text) {
+        std::ofstream(path) << text;
+        try {
+            FluxMap::read(path, 1.0);
+        } catch (const InputError& e) {
+            return e;
+        }
+        FAIL("accepted a malformed flux map");
+        throw std::logic_error("unreachable");
+    };
+    auto e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,1,0.4,x\n");
+    CHECK(e.line() == 3);
+    CHECK(e.field() == "psi_q_Vs");
+    e = refusal("i_d_A,i_q_A,psi_d_Vs\n0,0,0.4\n");
+    CHECK(e.field() == "psi_q_Vs");
+    e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,1,0.4,0.1\n1,0,0.5,0\n");
+    CHECK(e.message().find("complete rectangular grid") != std::string::npos);
+    e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,0,0.4,0.1\n");
+    CHECK(e.line() == 3);
+    std::filesystem::remove(path);
+}
+
+TEST_CASE("the flux-map plant settles where the measured map says", "[pmsm][flux_map]") {
+    const auto raw = raw_map();
+    // Loads chosen so that the torque balance lands the currents on grid points.
+    struct Point {
+        double rpm, i_d, i_q;
+    };
+    const std::vector<Point> points{{200.0, -4.0, 8.0}, {-300.0, 0.0, -10.0}};
+    std::vector<Segment> segments;
+    for (const auto& p : points) {
+        const auto& psi = raw.at({p.i_d, p.i_q});
+        const double torque = 1.5 * 2 * (psi.first * p.i_q - psi.second * p.i_d);
+        segments.push_back({"p", p.rpm, torque, p.i_d, 0.8, 20});
+    }
+    const auto drive = baldor_drive(segments);
+    const auto result = simulate(drive);
+    const FluxMap map = FluxMap::read(map_path, drive.motor.psi_f);
+    const auto& m = result.data;
+    for (std::size_t s = 0; s < points.size(); ++s) {
+        const auto& rows = result.segments[s];
+        const auto& p = points[s];
+        const auto& psi = raw.at({p.i_d, p.i_q});
+        const double omega = 2 * p.rpm * 2.0 * std::numbers::pi / 60.0;
+        auto mean = [&](const Eigen::VectorXd& v) { return v.segment(rows.first_row, rows.rows).mean(); };
+        // The controller is tuned with small-signal inductances the saturated machine does not have,
+        // which leaves a slow tail (pole near R/L of the controller's model): the currents are on the
+        // grid point to 1e-3 A, and every sample obeys the map at its own currents.
+        CHECK(mean(m.i_d) == Approx(p.i_d).margin(1e-3));
+        CHECK(mean(m.i_q) == Approx(p.i_q).margin(1e-3));
+        CHECK(mean(m.omega_e) == Approx(omega).epsilon(2e-5));
+        CHECK(mean(m.u_d) == Approx(0.63 * p.i_d - omega * psi.second).epsilon(1e-4));
+        CHECK(mean(m.u_q) == Approx(0.63 * p.i_q + omega * psi.first).epsilon(1e-4));
+        for (Eigen::Index k = rows.first_row; k < rows.first_row + rows.rows; ++k) {
+            const Complex f = map.flux({m.i_d[k], m.i_q[k]}, drive.motor.psi_f);
+            CHECK(m.u_d[k] == Approx(0.63 * m.i_d[k] - m.omega_e[k] * f.imag()).epsilon(1e-6));
+            CHECK(m.u_q[k] == Approx(0.63 * m.i_q[k] + m.omega_e[k] * f.real()).epsilon(1e-6));
+        }
+    }
+}
+
+TEST_CASE("the polynomial saturation model recovers the measured map", "[pmsm][flux_map][effects]") {
+    std::vector<Segment> segments;
+    for (double rpm : {200.0, -300.0})
+        for (double i_d : {0.0, -4.0, 4.0})
+            for (double torque : {3.0, 9.0}) segments.push_back({"s", rpm, rpm > 0 ? torque : -torque, i_d, 0.2, 20});
+    const auto result = simulate(baldor_drive(segments));
+    const Eigen::Index n = result.data.size();
+    Eigen::VectorXd y(2 * n);
+    y << result.data.u_d, result.data.u_q;
+    std::vector<std::unique_ptr<Effect>> effects;
+    effects.push_back(make_effect("saturation"));
+    SteadyStateModel model(result.data, std::move(effects));
+    const Eigen::MatrixXd phi = linear_columns(model);
+    const auto base = solve_least_squares(phi.leftCols(4), y);
+    const auto saturating = solve_least_squares(phi, y);
+    const double base_rms = std::sqrt(base.rss / static_cast<double>(2 * n));
+    const double saturating_rms = std::sqrt(saturating.rss / static_cast<double>(2 * n));
+    INFO("rms residual: base model " << base_rms << " V, with saturation " << saturating_rms << " V");
+    CHECK(saturating_rms * 10 < base_rms);
+    // The resistance, which the base model gets wrong by absorbing the saturation, comes back.
+    CHECK(std::abs(base.solution[0] - 0.63) > 0.1);
+    CHECK(saturating.solution[0] == Approx(0.63).epsilon(0.03));
+    // ... and so do the map's magnet flux and small-signal q inductance.
+    CHECK(saturating.solution[3] == Approx(0.444146).epsilon(0.05));
+    CHECK(saturating.solution[2] == Approx((0.281523 - 0.0) / 2.0).epsilon(0.05));
+}

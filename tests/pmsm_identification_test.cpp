@@ -1,0 +1,236 @@
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+
+#include <Eigen/Dense>
+
+#include "framework/input_error.hpp"
+#include "framework/optimizer.hpp"
+#include "framework/random.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/base_model_fit.hpp"
+#include "problems/pmsm/simulation_profile.hpp"
+#include "tests/pmsm_fixture.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+using namespace mhb::pmsm::testing;
+
+namespace {
+
+const std::filesystem::path work = std::filesystem::temp_directory_path() / "mhbench_pmsm_identification";
+const std::filesystem::path experiments = std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm";
+
+// Simulates `spec` into work/<name>.csv with its sidecar and returns the CSV path.
+std::filesystem::path simulated_file(const std::string& name, const DriveSimulation& spec) {
+    std::filesystem::create_directories(work);
+    const auto path = work / (name + ".csv");
+    write_simulation(path, spec, simulate(spec), name);
+    return path;
+}
+
+// The seed's two operating points with ideal sensors: 10 r/min, i_d = 0 then -0.1 A.
+DriveSimulation quiet_paper_drive() {
+    return quiet_drive({{"id0", 10.0, 0.1, 0.0, 0.8, 500}, {"id-0.1", 10.0, 0.1, -0.1, 0.4, 500}});
+}
+
+// Mean squared dq-voltage error of eq. (6), summed here sample by sample.
+double direct_fitness(const Measurement& m, const Eigen::Vector4d& theta, double weight_d = 1.0, double weight_q = 1.0) {
+    double sum = 0.0;
+    for (Eigen::Index k = 0; k < m.size(); ++k) {
+        const double ed = m.u_d[k] - (theta[0] * m.i_d[k] - theta[2] * m.omega_e[k] * m.i_q[k]);
+        const double eq = m.u_q[k] - (theta[0] * m.i_q[k] + theta[1] * m.omega_e[k] * m.i_d[k] + theta[3] * m.omega_e[k]);
+        sum += weight_d * ed * ed + weight_q * eq * eq;
+    }
+    return sum / static_cast<double>(m.size());
+}
+
+}  // namespace
+
+TEST_CASE("on noise-free ideal data the least-squares optimum is the truth", "[pmsm][identification]") {
+    const auto path = simulated_file("quiet_paper", quiet_paper_drive());
+    for (const std::string fitness : {"mse", "noise_weighted"}) {
+        INFO("fitness " << fitness);
+        const auto problem = make_problem("pmsm_identification", {{"data", path.string()}, {"fitness", fitness}});
+        const auto& truth = problem->truth();
+        REQUIRE(truth.true_parameters.has_value());
+        CHECK(*truth.true_parameters == Eigen::Vector4d(46.0, 0.02025, 0.02025, 0.04375));
+        REQUIRE(truth.reference_solution.has_value());
+        const Eigen::VectorXd error = (*truth.reference_solution - *truth.true_parameters).cwiseQuotient(*truth.true_parameters);
+        INFO("relative error " << error.transpose());
+        CHECK(error.cwiseAbs().maxCoeff() < 1e-8);
+        CHECK(truth.reference_label == "least-squares optimum");
+        CHECK(*truth.optimum_value == *truth.reference_fitness);
+        CHECK(problem->parameter_names() == std::vector<std::string>{"Rs", "Ld", "Lq", "psi_f"});
+        CHECK(problem->bounds().lower == Eigen::Vector4d::Constant(1e-6));
+        CHECK(problem->bounds().upper == Eigen::Vector4d(100, 10, 10, 10));
+    }
+    const auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
+    CHECK(*problem->truth().reference_fitness < 1e-18);
+}
+
+TEST_CASE("the batch evaluation equals the direct sum over samples", "[pmsm][identification]") {
+    auto spec = quiet_paper_drive();
+    spec.noise.current = 1e-3;
+    spec.noise.speed = 0.02;
+    spec.noise.voltage = 5e-3;
+    spec.seed = 5;
+    const auto path = simulated_file("noisy_paper", spec);
+    const Measurement data = read_measurement(path);
+    const auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
+
+    Rng rng(9);
+    Matrix x(4, 100);
+    fill_uniform(x, problem->bounds(), rng);
+    // Also candidates near the optimum, where cancellation would hurt the expanded quadratic.
+    for (Eigen::Index j = 50; j < 100; ++j)
+        for (Eigen::Index i = 0; i < 4; ++i)
+            x(i, j) = (*problem->truth().reference_solution)[i] * (1.0 + 1e-3 * rng.normal());
+    Vector f(100);
+    problem->evaluate(x, f);
+
+    Eigen::MatrixXd phi;
+    Eigen::VectorXd y;
+    base_regression(data, phi, y);
+    const double n = static_cast<double>(data.size());
+    const Eigen::Matrix4d a = phi.transpose() * phi;
+    const Eigen::Vector4d b = phi.transpose() * y;
+    const double c = y.squaredNorm();
+    for (Eigen::Index j = 0; j < 100; ++j) {
+        const Eigen::Vector4d theta = x.col(j);
+        const double direct = direct_fitness(data, theta);
+        CHECK(f[j] == Approx(direct).epsilon(1e-10));
+        // The expanded quadratic is the same number up to cancellation of its c-sized terms.
+        CHECK((theta.dot(a * theta) - 2 * b.dot(theta) + c) / n == Approx(direct).margin(1e-13 * c / n).epsilon(1e-10));
+    }
+    // The reference is the smallest value there is.
+    CHECK(f.minCoeff() >= *problem->truth().reference_fitness);
+    CHECK(*problem->truth().reference_fitness == Approx(direct_fitness(data, *problem->truth().reference_solution)).epsilon(1e-12));
+}
+
+TEST_CASE("the noise-weighted fitness divides each axis by its residual variance", "[pmsm][identification]") {
+    auto spec = quiet_paper_drive();
+    spec.noise.voltage = 0.002;  // logged-voltage noise dominates on d ...
+    spec.noise.current = 1e-4;
+    spec.seed = 6;
+    auto result = simulate(spec);
+    // ... and an extra, larger error on q makes the axes differ.
+    Rng rng(2);
+    for (Eigen::Index k = 0; k < result.data.size(); ++k) result.data.u_q[k] += 0.1 * rng.normal();
+    std::filesystem::create_directories(work);
+    const auto path = work / "weighted.csv";
+    write_measurement(path, result.data);
+    const auto problem = make_problem("pmsm_identification", {{"data", path.string()}, {"fitness", std::string("noise_weighted")}});
+
+    // The weights from an independent unweighted solution (SVD) and its per-axis residuals.
+    Eigen::MatrixXd phi;
+    Eigen::VectorXd y;
+    base_regression(result.data, phi, y);
+    const Eigen::VectorXd plain = phi.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(y);
+    const Eigen::VectorXd r = y - phi * plain;
+    const Eigen::Index n = result.data.size();
+    const double var_d = r.head(n).squaredNorm() / static_cast<double>(n), var_q = r.tail(n).squaredNorm() / static_cast<double>(n);
+    CHECK(var_q > 20 * var_d);
+
+    Matrix x(4, 3);
+    x.col(0) = Eigen::Vector4d(46.0, 0.02025, 0.02025, 0.04375);
+    x.col(1) = Eigen::Vector4d(45.0, 0.03, 0.01, 0.045);
+    x.col(2) = *problem->truth().reference_solution;
+    Vector f(3);
+    problem->evaluate(x, f);
+    for (int j = 0; j < 3; ++j) CHECK(f[j] == Approx(direct_fitness(result.data, x.col(j), 1.0 / var_d, 1.0 / var_q)).epsilon(1e-9));
+    // At its own optimum each axis contributes about one per sample.
+    CHECK(f[2] == Approx(2.0).epsilon(0.01));
+    CHECK_FALSE(problem->truth().true_parameters.has_value());  // no sidecar was written
+}
+
+TEST_CASE("settle drops the samples right after each segment start", "[pmsm][identification]") {
+    auto spec = quiet_paper_drive();
+    spec.segments[1].settle = 0.0;  // log the i_d step itself
+    spec.segments[1].samples = 400;
+    const auto path = simulated_file("unsettled", spec);
+    const auto all = make_problem("pmsm_identification", {{"data", path.string()}});
+    const auto settled = make_problem("pmsm_identification", {{"data", path.string()}, {"settle", 0.1}});
+    // The current step leaves L di/dt in the first milliseconds, which the model lacks, and a small
+    // speed-loop transient (double pole at 10 Hz) after it.
+    CHECK(*all->truth().reference_fitness > 1e-6);
+    INFO(settled->describe());
+    CHECK(*settled->truth().reference_fitness < 1e-16);
+    CHECK(settled->describe().find("400 of 900 samples") != std::string::npos);
+    const auto& truth = *settled->truth().true_parameters;
+    CHECK(((*settled->truth().reference_solution - truth).cwiseQuotient(truth)).cwiseAbs().maxCoeff() < 1e-6);
+}
+
+TEST_CASE("the reference stays inside Table 2's box and says which bound holds it", "[pmsm][identification]") {
+    // Data whose unconstrained fit has a negative Lq: u_d = +omega Lq i_q instead of minus.
+    Measurement m;
+    const Eigen::Index n = 400;
+    m.resize(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const bool injected = k >= n / 2;
+        m.i_d[k] = injected ? -0.1 : 0.0;
+        m.i_q[k] = 0.095 + 1e-3 * std::sin(0.1 * k);
+        m.omega_e[k] = 16.76;
+        m.u_d[k] = 46.0 * m.i_d[k] + 16.76 * 0.02 * m.i_q[k];
+        m.u_q[k] = 46.0 * m.i_q[k] + 16.76 * 0.02 * m.i_d[k] + 16.76 * 0.044 + 1e-3 * std::cos(0.37 * k);
+    }
+    std::filesystem::create_directories(work);
+    const auto path = work / "negative_lq.csv";
+    write_measurement(path, m);
+    const auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
+    const auto& ref = *problem->truth().reference_solution;
+    CHECK(ref[2] == 1e-6);
+    CHECK(problem->truth().reference_label == "least-squares optimum (inside Table 2's box: Lq at its lower bound)");
+    // No point of the box does better.
+    Rng rng(4);
+    Matrix x(4, 2000);
+    fill_uniform(x, problem->bounds(), rng);
+    for (Eigen::Index j = 1000; j < 2000; ++j) {
+        x.col(j) = ref + 1e-4 * ref.cwiseProduct(Eigen::Vector4d(rng.normal(), rng.normal(), rng.normal(), rng.normal()));
+        clamp_to_bounds(x.col(j), problem->bounds());
+    }
+    Vector f(2000);
+    problem->evaluate(x, f);
+    CHECK(f.minCoeff() >= *problem->truth().reference_fitness);
+}
+
+TEST_CASE("pmsm_identification refuses what it cannot fit", "[pmsm][identification]") {
+    CHECK_THROWS_AS(make_problem("pmsm_identification"), ParameterError);
+    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", std::string("no_such_file.csv")}}, {work, 0}), InputError);
+    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"fitness", std::string("mae")}, {"data", std::string("x.csv")}}),
+                    ParameterError);
+    // Relative paths resolve against the context's base directory.
+    const auto path = simulated_file("relative", quiet_drive({{"a", 10.0, 0.1, 0.0, 0.5, 10}, {"b", 10.0, 0.1, -0.1, 0.2, 10}}));
+    CHECK_NOTHROW(make_problem("pmsm_identification", {{"data", path.filename().string()}}, {work, 0}));
+    Measurement bare = read_measurement(path);
+    bare.t.reset();
+    write_measurement(work / "no_time.csv", bare);
+    try {
+        make_problem("pmsm_identification", {{"data", (work / "no_time.csv").string()}, {"settle", 0.01}});
+        FAIL("settle without a time column was accepted");
+    } catch (const InputError& e) {
+        CHECK(e.field() == "settle");
+    }
+    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", path.string()}, {"settle", 1.0}}), InputError);
+}
+
+TEST_CASE("with the seed's two operating points and realistic noise Ld and Lq are poorly determined",
+          "[pmsm][identification]") {
+    const auto paper = simulate(read_simulation_profile(experiments / "paper_profile.toml"));
+    const auto multi = simulate(read_simulation_profile(experiments / "multi_point_profile.toml"));
+    const auto two = fit_base_model(paper.data, Fitness::MeanSquared, CovarianceMethod::NeweyWest);
+    const auto many = fit_base_model(multi.data, Fitness::MeanSquared, CovarianceMethod::NeweyWest);
+    auto half_width = [](const BaseModelFit& fit) {
+        return Eigen::Vector4d(fit.uncertainty.critical_value * fit.uncertainty.standard_error.cwiseQuotient(fit.least_squares.solution));
+    };
+    const Eigen::Vector4d w2 = half_width(two), wm = half_width(many);
+    INFO("relative 95 % half-widths, two points: " << w2.transpose() << "; ten points: " << wm.transpose());
+    // The inductances ride on millivolts: about ±10 % and more, while Rs and psi_f are known to 1 %.
+    CHECK(w2[1] > 0.08);
+    CHECK(w2[2] > 0.08);
+    CHECK(w2[0] < 0.01);
+    CHECK(w2[3] < 0.02);
+    // More operating points (two speeds, both directions, three d currents) narrow them several-fold.
+    CHECK(wm[1] < w2[1] / 2.5);
+    CHECK(wm[2] < w2[2] / 2.5);
+}

@@ -1,0 +1,173 @@
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+#include "framework/input_error.hpp"
+#include "problems/pmsm/measurement.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+
+namespace {
+
+// The error a parse throws, so each refusal can be checked for its file, line and column.
+InputError refusal(const std::string& text) {
+    try {
+        parse_measurement(text, "bad.csv");
+    } catch (const InputError& e) {
+        return e;
+    }
+    FAIL("the reader accepted input it should refuse:\n" << text);
+    throw std::logic_error("unreachable");
+}
+
+}  // namespace
+
+TEST_CASE("the measurement reader takes required and optional columns", "[pmsm][measurement]") {
+    const std::string text =
+        "\xEF\xBB\xBFt,segment,theta_e,i_d,i_q,u_d,u_q,omega_e,temp_winding,temp_magnet,comment\r\n"
+        "0,id0,0.5,0,0.1,-0.03,5.3,16.76,20,21,first\r\n"
+        "0.0004, id0 ,+0.51,-0,1e-1,-3e-2,5.3,16.76,20.5,21,x\r\n"
+        "\r\n"
+        "0.0008,7,0.52,-0.1,0.1,-4.6,5.2,16.76,21,21,\"y\"\r\n";
+    const auto m = parse_measurement(text, "ok.csv");
+    REQUIRE(m.size() == 3);
+    CHECK(m.i_q[1] == 0.1);
+    CHECK(m.u_d[1] == -0.03);
+    CHECK(m.theta_e.has_value());
+    CHECK((*m.theta_e)[1] == 0.51);
+    CHECK((*m.temp_winding)[1] == 20.5);
+    REQUIRE(m.segment_labels == std::vector<std::string>{"id0", "7"});
+    CHECK(m.segment[0] == 0);
+    CHECK(m.segment[1] == 0);
+    CHECK(m.segment[2] == 1);
+    // The unknown column and the blank line are reported, not silently dropped.
+    REQUIRE(m.warnings.size() == 2);
+    CHECK(m.warnings[0].find("comment") != std::string::npos);
+    CHECK(m.warnings[1].find("1 blank line") != std::string::npos);
+}
+
+TEST_CASE("the measurement reader refuses bad input, naming file, line and column", "[pmsm][measurement]") {
+    SECTION("empty file") {
+        const auto e = refusal(" \n\n");
+        CHECK(e.file() == "bad.csv");
+        CHECK(std::string(e.what()).find("empty file") != std::string::npos);
+    }
+    SECTION("header without rows") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n");
+        CHECK(std::string(e.what()).find("no data rows") != std::string::npos);
+    }
+    SECTION("missing required column") {
+        const auto e = refusal("i_d,i_q,u_d,omega_e\n1,2,3,4\n");
+        CHECK(e.line() == 1);
+        CHECK(e.field() == "u_q");
+        CHECK(e.message().find("missing required column") != std::string::npos);
+    }
+    SECTION("duplicate column") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e,i_q\n1,2,3,4,5,6\n");
+        CHECK(e.line() == 1);
+        CHECK(e.field() == "i_q");
+        CHECK(e.message().find("duplicate column (columns 2 and 6)") != std::string::npos);
+    }
+    SECTION("non-numeric value") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n1,2,3,4,5\n1,2,three,4,5\n");
+        CHECK(e.line() == 3);
+        CHECK(e.field() == "u_d");
+        CHECK(e.message().find("not a number: 'three'") != std::string::npos);
+        CHECK(std::string(e.what()) == "bad.csv:3: u_d: not a number: 'three'");
+    }
+    SECTION("trailing garbage after a number") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n1,2,3,4,5V\n");
+        CHECK(e.line() == 2);
+        CHECK(e.field() == "omega_e");
+    }
+    SECTION("non-finite value") {
+        for (const char* bad : {"nan", "inf", "-inf", "NaN"}) {
+            const auto e = refusal(std::string("i_d,i_q,u_d,u_q,omega_e,temp_magnet\n1,2,3,4,5,6\n1,2,3,4,5,") + bad + "\n");
+            CHECK(e.line() == 3);
+            CHECK(e.field() == "temp_magnet");
+            CHECK(e.message().find("not a finite number") != std::string::npos);
+        }
+    }
+    SECTION("empty value") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n1,,3,4,5\n");
+        CHECK(e.line() == 2);
+        CHECK(e.field() == "i_q");
+    }
+    SECTION("ragged row") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n1,2,3,4,5\n\n1,2,3,4\n");
+        CHECK(e.line() == 4);
+        CHECK(e.message() == "row has 4 fields but the header has 5");
+    }
+    SECTION("empty segment label") {
+        const auto e = refusal("segment,i_d,i_q,u_d,u_q,omega_e\na,1,2,3,4,5\n ,1,2,3,4,5\n");
+        CHECK(e.line() == 3);
+        CHECK(e.field() == "segment");
+    }
+    SECTION("empty column name") {
+        const auto e = refusal("i_d,,i_q,u_d,u_q,omega_e\n1,2,3,4,5,6\n");
+        CHECK(e.line() == 1);
+        CHECK(e.field() == "column 2");
+    }
+}
+
+TEST_CASE("written measurements read back bit for bit", "[pmsm][measurement]") {
+    Measurement m;
+    const Eigen::Index n = 50;
+    m.i_d = Eigen::VectorXd::LinSpaced(n, -0.1, 0.0);
+    m.i_q = Eigen::VectorXd::Random(n) * 0.2;
+    m.u_d = Eigen::VectorXd::Random(n) / 3.0;
+    m.u_q = Eigen::VectorXd::Random(n) * 7.0;
+    m.omega_e = Eigen::VectorXd::Constant(n, 16.0 * 10.0 * 2.0 * 3.141592653589793 / 60.0);
+    m.t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.0004 * (n - 1));
+    m.theta_e = Eigen::VectorXd::Random(n) * 3.1;
+    m.temp_magnet = Eigen::VectorXd::Constant(n, 1.0 / 3.0);
+    m.segment_labels = {"id0", "id-0.1"};
+    m.segment = Eigen::VectorXi::Zero(n);
+    m.segment.tail(20).setOnes();
+
+    const auto path = std::filesystem::temp_directory_path() / "mhbench_pmsm_roundtrip.csv";
+    write_measurement(path, m);
+    const auto back = read_measurement(path);
+    std::filesystem::remove(path);
+    CHECK(back.warnings.empty());
+    CHECK(back.i_d == m.i_d);
+    CHECK(back.i_q == m.i_q);
+    CHECK(back.u_d == m.u_d);
+    CHECK(back.u_q == m.u_q);
+    CHECK(back.omega_e == m.omega_e);
+    CHECK(*back.t == *m.t);
+    CHECK(*back.theta_e == *m.theta_e);
+    CHECK(*back.temp_magnet == *m.temp_magnet);
+    CHECK_FALSE(back.temp_winding.has_value());
+    CHECK(back.segment_labels == m.segment_labels);
+    CHECK(back.segment == m.segment);
+}
+
+TEST_CASE("labels that CSV cannot carry are refused by the writer", "[pmsm][measurement]") {
+    Measurement m;
+    m.i_d = m.i_q = m.u_d = m.u_q = m.omega_e = Eigen::VectorXd::Zero(1);
+    m.segment_labels = {"a,b"};
+    m.segment = Eigen::VectorXi::Zero(1);
+    CHECK_THROWS_AS(write_measurement(std::filesystem::temp_directory_path() / "mhbench_pmsm_bad_label.csv", m), InputError);
+}
+
+TEST_CASE("settled rows drop the start of every segment", "[pmsm][measurement]") {
+    Measurement m;
+    const Eigen::Index n = 10;
+    m.resize(n);
+    m.t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.9);  // 0.1 s apart
+    m.segment_labels = {"a", "b"};
+    m.segment = Eigen::VectorXi::Zero(n);
+    m.segment.tail(5).setOnes();
+    const auto rows = settled_rows(m, 0.15);
+    CHECK(rows == std::vector<Eigen::Index>{2, 3, 4, 7, 8, 9});
+    const auto kept = select_rows(m, rows);
+    CHECK(kept.size() == 6);
+    CHECK((*kept.t)[3] == Approx(0.7));
+    Measurement bare;
+    bare.resize(3);
+    CHECK_THROWS_AS(settled_rows(bare, 0.1), InputError);
+    CHECK(settled_rows(bare, 0.0).size() == 3);
+}
