@@ -2,6 +2,16 @@
 
 namespace mhb {
 
+std::vector<ListedRegistry>& listed_registries() {
+    static std::vector<ListedRegistry> registries;
+    return registries;
+}
+
+namespace {
+const bool optimizers_listed = list_registry<OptimizerFactory>("optimizers");
+const bool problems_listed = list_registry<ProblemFactory>("problems");
+}  // namespace
+
 std::unique_ptr<Optimizer> make_optimizer(const std::string& name, const std::map<std::string, ParameterValue>& values) {
     const auto& entry = OptimizerRegistry::instance().at(name, "optimizer");
     return entry.create(ParameterSet(entry.parameters, values));

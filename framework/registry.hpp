@@ -115,6 +115,36 @@ private:
     std::vector<std::string> conflicts_;
 };
 
+// Every registry that `mhbench list` shows and whose name conflicts it checks. Optimizers and
+// problems are listed by the core; a plugin family with a registry of its own (e.g. the PMSM
+// effects) adds itself with list_registry<Factory>("effects") from its own source file.
+struct ListedRegistry {
+    std::string kind;  // plural, e.g. "effects"
+    std::function<std::vector<std::pair<std::string, std::string>>()> names_and_summaries;
+    std::function<std::vector<std::vector<ParameterSpec>>()> parameters;  // in the same order
+    std::function<std::vector<std::string>()> conflicts;
+};
+std::vector<ListedRegistry>& listed_registries();
+
+template <class Factory>
+bool list_registry(const std::string& kind) {
+    auto& reg = Registry<Factory>::instance();
+    listed_registries().push_back(ListedRegistry{
+        kind,
+        [&reg] {
+            std::vector<std::pair<std::string, std::string>> out;
+            for (const auto* e : reg.entries()) out.emplace_back(e->name, e->summary);
+            return out;
+        },
+        [&reg] {
+            std::vector<std::vector<ParameterSpec>> out;
+            for (const auto* e : reg.entries()) out.push_back(e->parameters);
+            return out;
+        },
+        [&reg] { return reg.conflicts(); }});
+    return true;
+}
+
 using OptimizerFactory = std::function<std::unique_ptr<Optimizer>(const ParameterSet&)>;
 using ProblemFactory = std::function<std::unique_ptr<Problem>(const ParameterSet&, const ProblemContext&)>;
 

@@ -44,13 +44,14 @@ int run(int argc, char** argv) {
         std::fprintf(stderr, "error: command line: %s\nRun 'mhbench --help' for usage.\n", e.what());
         return exit_bad_input;
     }
-    for (const char* kind : {"optimizer", "problem"}) {
-        const auto& conflicts = std::string(kind) == "optimizer" ? OptimizerRegistry::instance().conflicts()
-                                                                  : ProblemRegistry::instance().conflicts();
-        for (const auto& name : conflicts)
-            std::fprintf(stderr, "error: two %s plugins register the name '%s'; rename one of them\n", kind, name.c_str());
-        if (!conflicts.empty()) return exit_bad_input;
-    }
+    bool conflicts = false;
+    for (const auto& registry : listed_registries())
+        for (const auto& name : registry.conflicts()) {
+            std::fprintf(stderr, "error: two plugins among the %s register the name '%s'; rename one of them\n",
+                         registry.kind.c_str(), name.c_str());
+            conflicts = true;
+        }
+    if (conflicts) return exit_bad_input;
     for (auto* sub : app.get_subcommands()) {
         try {
             return actions.at(sub)();

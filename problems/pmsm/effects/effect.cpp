@@ -6,6 +6,10 @@
 
 namespace mhb::pmsm {
 
+namespace {
+const bool effects_listed = list_registry<EffectFactory>("effects");
+}  // namespace
+
 void ModelState::resize(Eigen::Index n) {
     for (auto* a : {&i_d, &i_q, &omega, &rs, &psi_f, &psi_d, &psi_q, &u_d, &u_q}) a->resize(n);
     theta.resize(data && data->theta_e ? n : 0);
