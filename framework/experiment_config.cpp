@@ -180,12 +180,12 @@ ExperimentSpec load_experiment(const fs::path& file) {
         reader.fail(static_cast<long>(e.source().begin.line), "", std::string("TOML syntax: ") + std::string(e.description()));
     }
     static const std::set<std::string> known{"name",  "description", "trials",   "seed",     "output",
-                                             "budget", "analysis",    "optimizer", "problem", "plots"};
+                                             "budget", "analysis",    "optimizer", "problem", "plots", "published"};
     for (const auto& [k, v] : root)
         if (!known.count(std::string(k.str())))
             reader.fail(line_of(v), std::string(k.str()),
                         "unknown key; expected one of name, description, trials, seed, output, plots, "
-                        "[budget], [analysis], [[optimizer]], [[problem]]");
+                        "[budget], [analysis], [[optimizer]], [[problem]], [[published]]");
 
     spec.name = reader.text(root, "name", "name", 1, false, file.stem().string());
     spec.description = reader.text(root, "description", "description", 1, false);
@@ -269,6 +269,45 @@ ExperimentSpec load_experiment(const fs::path& file) {
         }
     }
     if (spec.references.empty()) spec.references.push_back(spec.baseline);
+
+    if (const auto* node = root.get("published")) {
+        const auto* arr = node->as_array();
+        if (!arr) reader.fail(line_of(*node), "published", "must be an array of tables, written [[published]]");
+        std::size_t index = 0;
+        for (const auto& el : *arr) {
+            const std::string where = fmt::format("published[{}]", index++);
+            const auto* t = el.as_table();
+            if (!t) reader.fail(line_of(el), where, "must be a table");
+            PublishedResult r;
+            r.line = line_of(el);
+            r.label = reader.text(*t, "label", where + ".label", r.line, true);
+            r.problem = reader.text(*t, "problem", where + ".problem", r.line, true);
+            r.source = reader.text(*t, "source", where + ".source", r.line, true);
+            bool known_problem = false;
+            for (const auto& p : spec.problems) known_problem = known_problem || p.label == r.problem;
+            if (!known_problem) reader.fail(r.line, where + ".problem", "'" + r.problem + "' is not a problem label of this experiment");
+            for (const auto& [k, v] : *t) {
+                const std::string key(k.str()), field = where + "." + key;
+                if (key == "label" || key == "problem" || key == "source") continue;
+                if (key == "mean" || key == "std") {
+                    const auto* values = v.as_table();
+                    if (!values) reader.fail(line_of(v), field, "expects a table of parameter = number");
+                    for (const auto& [pk, pv] : *values) {
+                        auto d = pv.value<double>();
+                        if (!d) reader.fail(line_of(pv), field + "." + std::string(pk.str()), "expects a number");
+                        (key == "mean" ? r.mean : r.sd)[std::string(pk.str())] = *d;
+                    }
+                } else if (key == "fitness_mean" || key == "fitness_std" || key == "time_total") {
+                    auto d = v.value<double>();
+                    if (!d) reader.fail(line_of(v), field, "expects a number");
+                    (key == "fitness_mean" ? r.fitness_mean : key == "fitness_std" ? r.fitness_sd : r.time_total) = *d;
+                } else {
+                    reader.fail(line_of(v), field, "unknown key; expected label, problem, source, mean, std, fitness_mean, fitness_std, time_total");
+                }
+            }
+            spec.published.push_back(std::move(r));
+        }
+    }
     return spec;
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,17 @@ struct PluginVariant {
     long bounds_line = 0;
 };
 
+// Numbers a paper published for the same experiment, shown beside ours (never used in a test of
+// our results): `[[published]]` tables in the config.
+struct PublishedResult {
+    std::string label;    // e.g. "GWO (paper)"
+    std::string problem;  // the problem label it belongs to
+    std::string source;   // e.g. "He et al. 2024, Table 3"
+    std::map<std::string, double> mean, sd;  // per parameter name
+    std::optional<double> fitness_mean, fitness_sd, time_total;
+    long line = 0;
+};
+
 struct ExperimentSpec {
     std::filesystem::path file;       // the TOML file
     std::string name;
@@ -38,6 +50,7 @@ struct ExperimentSpec {
     std::string baseline;             // optimiser label the others are tested against
     std::vector<std::string> references;  // labels for pairwise columns (default: the baseline)
     bool plots = true;
+    std::vector<PublishedResult> published;
 };
 
 // Throws InputError (file, line, field) for anything malformed, unknown or out of range.

@@ -1,5 +1,6 @@
 #include "framework/experiment_runner.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <fstream>
@@ -78,6 +79,7 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec) {
     info.baseline = spec.baseline;
     info.references = spec.references;
     info.plots = spec.plots;
+    info.published = spec.published;
     for (const auto& v : spec.problems) {
         const auto problem = create_problem(spec, v, problem_context(spec, derive_seed(spec.seed, "", v.label, 0)));
         ProblemInfo p;
@@ -90,6 +92,14 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec) {
         p.description = problem->describe();
         info.problems.push_back(std::move(p));
     }
+    for (const auto& pub : spec.published)
+        for (const auto& p : info.problems)
+            if (p.label == pub.problem)
+                for (const auto* values : {&pub.mean, &pub.sd})
+                    for (const auto& [name, v] : *values)
+                        if (std::find(p.parameter_names.begin(), p.parameter_names.end(), name) == p.parameter_names.end())
+                            throw InputError(spec.file.string(), pub.line, "published." + name,
+                                             "problem '" + p.label + "' has no parameter named '" + name + "'");
     for (const auto& v : spec.optimizers) {
         try {
             (void)make_optimizer(v.name, v.values);

@@ -203,6 +203,10 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
             const fs::path data = data_dir / ("parameters_" + name + ".dat");
             std::ofstream out(data);
             std::vector<bool> has(info.optimizers.size(), false);
+            // The y range of each panel covers the curves after their first fifth (and the true
+            // value): the first iterations of a wide box (Table 2 allows L up to 10 H) would
+            // otherwise flatten the part a reader wants to see.
+            Vector low = Vector::Constant(prob.dimension, INFINITY), high = Vector::Constant(prob.dimension, -INFINITY);
             for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                 out << "# " << info.optimizers[o].label << "\n# iteration evaluations";
                 for (const auto& n : prob.parameter_names) out << " " << n;
@@ -222,6 +226,10 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
                         ++n;
                     }
                     mean /= static_cast<double>(n);
+                    if (5 * k >= length) {
+                        low = low.cwiseMin(mean);
+                        high = high.cwiseMax(mean);
+                    }
                     out << k << " " << evals / static_cast<double>(n);
                     for (Eigen::Index j = 0; j < mean.size(); ++j) out << fmt::format(" {:.12g}", mean[j]);
                     out << "\n";
@@ -239,6 +247,15 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
             for (int j = 0; j < d; ++j) {
                 const auto& pname = prob.parameter_names[static_cast<std::size_t>(j)];
                 body += fmt::format("set title {} noenhanced\nset xlabel 'iteration'\n", gnuplot_quote(pname));
+                double lo = low[j], hi = high[j];
+                if (truth) {
+                    lo = std::min(lo, (*truth)[j]);
+                    hi = std::max(hi, (*truth)[j]);
+                }
+                if (std::isfinite(lo) && std::isfinite(hi)) {
+                    const double pad = std::max(0.1 * (hi - lo), 1e-3 * std::max(std::abs(lo), std::abs(hi)));
+                    body += fmt::format("set yrange [{:.10g}:{:.10g}]\n", lo - pad, hi + (pad > 0 ? pad : 1.0));
+                }
                 std::string plots;
                 for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                     if (!has[o]) continue;

@@ -189,9 +189,31 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                 std::vector<double> fit;
                 for (const auto* t : trials) fit.push_back(t->best_fitness);
                 const auto fs = stats::summarize(fit);
-                row += fmt::format(" {} | {} | {} |\n", num(fs.mean), num(fs.sd), fmt::format("{:.3f}", seconds_sum(trials)));
+                row += fmt::format(" {} | {} | {} |\n", num(fs.mean), num(fs.sd), num(seconds_sum(trials)));
                 md += row;
             }
+            for (const auto& pub : info.published) {
+                if (pub.problem != prob.label) continue;
+                std::string row = "| " + pub.label + " |";
+                for (int j = 0; j < prob.dimension; ++j) {
+                    const auto& n = prob.parameter_names[static_cast<std::size_t>(j)];
+                    auto m = pub.mean.find(n);
+                    auto d = pub.sd.find(n);
+                    const double err = (m != pub.mean.end() && target) ? 100.0 * std::abs(m->second - (*target)[j]) / std::abs((*target)[j])
+                                                                      : std::nan("");
+                    row += fmt::format(" {} | {} | {} |", m != pub.mean.end() ? num(m->second) : "–", fmt::format("{:.3g}", err),
+                                       d != pub.sd.end() ? num(d->second) : "–");
+                }
+                row += fmt::format(" {} | {} | {} |\n", pub.fitness_mean ? num(*pub.fitness_mean) : "–",
+                                   pub.fitness_sd ? num(*pub.fitness_sd) : "–", pub.time_total ? fmt::format("{:.3f}", *pub.time_total) : "–");
+                md += row;
+            }
+            std::set<std::string> sources;
+            for (const auto& pub : info.published)
+                if (pub.problem == prob.label) sources.insert(pub.source);
+            for (const auto& src : sources)
+                md += fmt::format("\nRows marked as published are quoted from {}, with the error % recomputed against the truth above; "
+                                  "their fitness values come from the paper's own fitness function, which may differ from ours.\n", src);
             md += "\n";
             if (prob.truth.reference_fitness) {
                 md += fmt::format("Gap to the {} (fitness {}): ", prob.truth.reference_label, num(*prob.truth.reference_fitness));

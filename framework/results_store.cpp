@@ -62,6 +62,34 @@ json optional_json(const std::optional<T>& o) {
     else return number(*o);
 }
 
+json published_json(const std::vector<PublishedResult>& published) {
+    json out = json::array();
+    for (const auto& p : published) {
+        json o{{"label", p.label}, {"problem", p.problem}, {"source", p.source}, {"mean", p.mean}, {"std", p.sd}};
+        o["fitness_mean"] = p.fitness_mean ? json(*p.fitness_mean) : json(nullptr);
+        o["fitness_std"] = p.fitness_sd ? json(*p.fitness_sd) : json(nullptr);
+        o["time_total"] = p.time_total ? json(*p.time_total) : json(nullptr);
+        out.push_back(std::move(o));
+    }
+    return out;
+}
+std::vector<PublishedResult> published_from(const json& j) {
+    std::vector<PublishedResult> out;
+    for (const auto& o : j) {
+        PublishedResult p;
+        p.label = o.at("label");
+        p.problem = o.at("problem");
+        p.source = o.at("source");
+        p.mean = o.at("mean").get<std::map<std::string, double>>();
+        p.sd = o.at("std").get<std::map<std::string, double>>();
+        if (!o.at("fitness_mean").is_null()) p.fitness_mean = o["fitness_mean"].get<double>();
+        if (!o.at("fitness_std").is_null()) p.fitness_sd = o["fitness_std"].get<double>();
+        if (!o.at("time_total").is_null()) p.time_total = o["time_total"].get<double>();
+        out.push_back(std::move(p));
+    }
+    return out;
+}
+
 }  // namespace
 
 json to_json(const TrialRecord& r) {
@@ -134,7 +162,8 @@ json to_json(const ExperimentInfo& info) {
             {"problems", problems},
             {"baseline", info.baseline},
             {"references", info.references},
-            {"plots", info.plots}};
+            {"plots", info.plots},
+            {"published", published_json(info.published)}};
 }
 
 ExperimentInfo experiment_from_json(const json& j) {
@@ -165,6 +194,7 @@ ExperimentInfo experiment_from_json(const json& j) {
     info.baseline = j.at("baseline");
     info.references = j.at("references").get<std::vector<std::string>>();
     info.plots = j.value("plots", true);
+    if (j.contains("published")) info.published = published_from(j["published"]);
     return info;
 }
 

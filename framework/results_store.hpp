@@ -40,6 +40,7 @@ struct ExperimentInfo {
     std::string baseline;
     std::vector<std::string> references;
     bool plots = true;
+    std::vector<PublishedResult> published;
 };
 
 nlohmann::json to_json(const TrialRecord& record);

@@ -126,3 +126,19 @@ TEST_CASE("a problem's box can be replaced from the config; lower > upper is ref
     spec = load_experiment(dir.write("short.toml", base + "lower = [0, 0]\n"));
     REQUIRE_THROWS_WITH(describe_experiment(spec), Catch::Contains("bounds need 3 values"));
 }
+
+TEST_CASE("published numbers are read and checked against the experiment's problems", "[experiment_config]") {
+    testing::TemporaryDirectory dir;
+    const std::string base = "name = \"p\"\ntrials = 1\nseed = 1\n[budget]\niterations = 2\n"
+                             "[[optimizer]]\nname = \"random_search\"\n[[problem]]\nname = \"test_sphere\"\nlabel = \"S\"\n";
+    const auto spec = load_experiment(dir.write("ok.toml", base + "[[published]]\nlabel = \"X (paper)\"\nproblem = \"S\"\n"
+                                                                 "source = \"a paper\"\nmean = { x1 = 1.5 }\nfitness_mean = 0.25\n"));
+    REQUIRE(spec.published.size() == 1);
+    REQUIRE(spec.published[0].mean.at("x1") == 1.5);
+    REQUIRE(*spec.published[0].fitness_mean == 0.25);
+    REQUIRE_NOTHROW(describe_experiment(spec));
+    CHECK_THAT(error_of(base + "[[published]]\nlabel = \"X\"\nproblem = \"T\"\nsource = \"s\"\n"),
+               Catch::Contains("published[0].problem: 'T' is not a problem label"));
+    const auto bad = load_experiment(dir.write("bad.toml", base + "[[published]]\nlabel = \"X\"\nproblem = \"S\"\nsource = \"s\"\nmean = { Rs = 1 }\n"));
+    REQUIRE_THROWS_WITH(describe_experiment(bad), Catch::Contains("published.Rs: problem 'S' has no parameter named 'Rs'"));
+}
