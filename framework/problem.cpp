@@ -27,6 +27,7 @@ void Problem::override_bounds(const Vector& lower, const Vector& upper) {
             throw std::invalid_argument("lower > upper for " + parameter_names_[static_cast<std::size_t>(j)] + " (" +
                                         std::to_string(lower[j]) + " > " + std::to_string(upper[j]) + ")");
     bounds_ = Bounds{lower, upper};
+    bounds_changed();
 }
 
 void Problem::set_domain(int dimension, double lower, double upper) {

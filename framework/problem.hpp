@@ -49,6 +49,12 @@ public:
     // std::invalid_argument when sizes differ or lower > upper somewhere.
     void override_bounds(const Vector& lower, const Vector& upper);
 
+protected:
+    // Called after override_bounds: a problem whose known truth depends on the box (an exact
+    // optimum inside it) recomputes it here.
+    virtual void bounds_changed() {}
+
+public:
     // Free text shown in `mhbench list` and reports (e.g. the data file a PMSM problem was fitted to).
     virtual std::string describe() const { return {}; }
 

@@ -234,3 +234,28 @@ TEST_CASE("with the seed's two operating points and realistic noise Ld and Lq ar
     CHECK(wm[1] < w2[1] / 2.5);
     CHECK(wm[2] < w2[2] / 2.5);
 }
+
+TEST_CASE("a box set by the experiment moves the reference optimum to the box's edge", "[pmsm][identification]") {
+    const auto path = simulated_file("quiet_paper_box", quiet_paper_drive());
+    auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
+    const Eigen::Vector4d unconstrained = *problem->truth().reference_solution;
+    REQUIRE(unconstrained[0] == Approx(46.0).epsilon(1e-6));
+    Eigen::Vector4d lower = problem->bounds().lower, upper = problem->bounds().upper;
+    upper[0] = 45.0;  // exclude the true Rs
+    problem->override_bounds(lower, upper);
+    const auto& truth = problem->truth();
+    REQUIRE((*truth.reference_solution)[0] == 45.0);
+    REQUIRE_THAT(truth.reference_label, Catch::Contains("Rs at its upper bound"));
+    // The new reference is the best point of the new box: its fitness is below that of nearby points inside it.
+    Matrix x(4, 3);
+    x.col(0) = *truth.reference_solution;
+    x.col(1) = *truth.reference_solution;
+    x(0, 1) = 44.9;
+    x.col(2) = *truth.reference_solution;
+    x(1, 2) *= 1.01;
+    Vector f(3);
+    problem->evaluate(x, f);
+    REQUIRE(f[0] == Approx(*truth.reference_fitness).epsilon(1e-9));
+    REQUIRE(f[0] < f[1]);
+    REQUIRE(f[0] < f[2]);
+}

@@ -36,19 +36,7 @@ public:
         const Bounds box = base_parameter_bounds();
         set_domain(box.lower, box.upper, base_parameter_names);
         if (auto truth = read_sidecar_truth(path_)) truth_.true_parameters = Vector(*truth);
-        truth_.reference_solution = fit_.in_bounds.solution;
-        truth_.reference_fitness = fit_.in_bounds.rss / static_cast<double>(fit_.samples);
-        truth_.optimum_value = truth_.reference_fitness;
-        truth_.reference_label = "least-squares optimum";
-        if (fit_.in_bounds.any_bound_active()) {
-            std::string active;
-            for (std::size_t j = 0; j < 4; ++j)
-                if (fit_.in_bounds.at_bound[j] != 0)
-                    active += fmt::format("{}{} at its {} bound", active.empty() ? "" : ", ", base_parameter_names[j],
-                                          fit_.in_bounds.at_bound[j] < 0 ? "lower" : "upper");
-            truth_.reference_label += " (inside Table 2's box: " + active + ")";
-        }
-
+        set_reference(fit_.in_bounds, "Table 2's box");
         gram_ = fit_.least_squares.gram;
         centre_ = fit_.least_squares.solution;
         scale_ = 1.0 / static_cast<double>(fit_.samples);
@@ -77,7 +65,26 @@ public:
         return text;
     }
 
+protected:
+    void bounds_changed() override { set_reference(box_least_squares(fit_.least_squares, bounds()), "the experiment's box"); }
+
 private:
+    // The exact optimum inside the search box is the reference every optimiser should reach.
+    void set_reference(const BoxLeastSquares& optimum, const std::string& box_name) {
+        truth_.reference_solution = optimum.solution;
+        truth_.reference_fitness = optimum.rss / static_cast<double>(fit_.samples);
+        truth_.optimum_value = truth_.reference_fitness;
+        truth_.reference_label = "least-squares optimum";
+        if (optimum.any_bound_active()) {
+            std::string active;
+            for (std::size_t j = 0; j < 4; ++j)
+                if (optimum.at_bound[j] != 0)
+                    active += fmt::format("{}{} at its {} bound", active.empty() ? "" : ", ", base_parameter_names[j],
+                                          optimum.at_bound[j] < 0 ? "lower" : "upper");
+            truth_.reference_label += " (inside " + box_name + ": " + active + ")";
+        }
+    }
+
     std::filesystem::path path_;
     Measurement data_;
     Eigen::Index total_samples_ = 0;
