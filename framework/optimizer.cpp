@@ -53,7 +53,8 @@ double Progress::fraction(std::int64_t offset) const {
     if (budget.max_iterations > 0)
         r = static_cast<double>(iteration + offset) / static_cast<double>(budget.max_iterations);
     if (budget.max_evaluations > 0)
-        r = std::max(r, static_cast<double>(evaluations) / static_cast<double>(budget.max_evaluations));
+        r = std::max(r, static_cast<double>(evaluations + offset * last_step_evaluations) /
+                            static_cast<double>(budget.max_evaluations));
     return std::clamp(r, 0.0, 1.0);
 }
 

@@ -51,11 +51,15 @@ private:
 struct Progress {
     std::int64_t iteration = 1;  // 1-based index of the iteration about to run
     std::int64_t evaluations = 0;
+    // Evaluations the previous step used (the initialisation, for iteration 1): how far one
+    // iteration moves an evaluation budget.
+    std::int64_t last_step_evaluations = 0;
     Budget budget;
 
     // Fraction of the run used, for schedules written as t/T: with an iteration budget
-    // (iteration + offset) / T, with an evaluation budget evaluations / E (the larger when both are
-    // set), clamped to [0, 1]. SO's t/T is fraction(0); GWO's l/T (l = 0..T-1) is fraction(-1).
+    // (iteration + offset) / T; with an evaluation budget (evaluations + offset * last step) / E, so
+    // an offset means the same under both (the larger of the two when both are set); clamped to
+    // [0, 1]. SO's t/T is fraction(0); GWO's l/T (l = 0..T-1) is fraction(-1).
     double fraction(std::int64_t offset = 0) const;
 };
 

@@ -28,6 +28,7 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
         record();
         Progress progress;
         progress.budget = setup.budget;
+        progress.last_step_evaluations = evaluator.evaluations();
         while (!evaluator.exhausted() &&
                (setup.budget.max_iterations <= 0 || rec.iterations < setup.budget.max_iterations)) {
             progress.iteration = rec.iterations + 1;
@@ -35,6 +36,7 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
             const auto before = evaluator.evaluations();
             optimizer.iterate(progress, evaluator, rng);
             ++rec.iterations;
+            progress.last_step_evaluations = evaluator.evaluations() - before;
             record();
             // An optimiser that stops evaluating would loop forever under an evaluation-only budget.
             if (setup.budget.max_iterations <= 0 && evaluator.evaluations() == before)

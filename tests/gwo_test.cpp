@@ -76,12 +76,13 @@ TEST_CASE("a = 2 - 2l/T with l = 0..T-1 for GWO.m, and gen/G for the library var
             CHECK(gwo.a() == Approx(2.0 - 2.0 * (k - offset) / kIterations).margin(1e-15));
         }
     }
-    // Under an evaluation budget the fraction is evaluations used / budget when the iteration starts.
+    // Under an evaluation budget GWO.m's l/T is (evaluations - one iteration's) / budget when the
+    // iteration starts: a = 2 at the first iteration, as with an iteration budget.
     GreyWolfOptimizer gwo(10, GwoVariant::Original);
     testing::ManualRun run(sphere, Budget{0, 200}, 3);
     run.initialize(gwo);
     for (int k = 1; k <= 5; ++k) {
-        const double used = static_cast<double>(run.evaluator.evaluations());
+        const double used = static_cast<double>(run.evaluator.evaluations() - 10);
         run.iterate(gwo);
         CHECK(gwo.a() == Approx(2.0 - 2.0 * used / 200.0));
     }

@@ -44,5 +44,8 @@ TEST_CASE("progress fraction follows the budget kind", "[evaluator]") {
     REQUIRE(p.fraction(-1) == Approx(49.0 / 200.0));
     p.budget = Budget{0, 1000};
     p.evaluations = 300;
+    p.last_step_evaluations = 100;
     REQUIRE(p.fraction() == Approx(0.3));
+    // GWO.m's l/T under an evaluation budget: one step back.
+    REQUIRE(p.fraction(-1) == Approx(0.2));
 }
