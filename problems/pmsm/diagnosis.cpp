@@ -225,6 +225,9 @@ std::vector<Proposal> experiment_proposals(const Measurement& data, const std::v
     const OperatingPoint base{fastest.omega, fastest.i_d, fastest.i_q, fastest.temp_winding.value_or(reference_temperature),
                               fastest.temp_magnet.value_or(reference_temperature)};
     auto add = [&](std::string name, OperatingPoint p) {
+        // Currents that are zero up to the noise of the segment means read as zero.
+        for (double* i : {&p.i_d, &p.i_q})
+            if (std::abs(*i) < 1e-3 * largest_current) *i = 0.0;
         const std::string where = fmt::format("omega_e = {:.3g} rad/s, i_d = {:.3g} A, i_q = {:.3g} A", p.omega, p.i_d, p.i_q);
         out.push_back({{std::move(name), where, 0.0}, [p](const Measurement& d) { return with_point(d, p); }});
     };
@@ -732,8 +735,19 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.missing_effect_found = top_supported;
     if (top_supported) {
         const auto& top = out.candidates.front();
-        for (const auto& c : out.candidates)
-            if (c.verdict == Verdict::Supported && c.delta_bic - top.delta_bic < tie_margin) out.tie.push_back(c.effect);
+        out.tie.push_back(top.effect);
+        for (std::size_t k = 1; k < out.candidates.size(); ++k) {
+            const auto& c = out.candidates[k];
+            if (c.verdict != Verdict::Supported) continue;
+            // A tie: the evidence does not prefer one strongly, or the design cannot tell the two
+            // apart at all (each one's signature lies in the span of the other's and the model's), so
+            // that what separates their scores is parsimony or noise.
+            const bool close = c.delta_bic - top.delta_bic < tie_margin;
+            const bool confounded =
+                !close && std::max(most_distinct(design_unique_fractions(design, spec, out.model.values, c.effect, top.effect)),
+                                   most_distinct(design_unique_fractions(design, spec, out.model.values, top.effect, c.effect))) < clear_above;
+            if (close || confounded) out.tie.push_back(c.effect);
+        }
         if (out.tie.size() == 1) {
             out.winner = top.effect;
             out.tie.clear();
@@ -782,7 +796,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
                                     100.0 * w.unique_fraction, w.effect, percent(w.base_shift[0]), percent(w.base_shift[1]), percent(w.base_shift[2]),
                                     percent(w.base_shift[3])));
     } else if (!out.tie.empty()) {
-        f.push_back(fmt::format("Near tie: {} explain the residual about equally well (dBIC within {:g}); the data cannot say which is missing.",
+        f.push_back(fmt::format("Near tie: {} explain the residual about equally well (dBIC within {:g}) or cannot be told apart on this "
+                                "design; the data cannot say which is missing.",
                                 join(out.tie), tie_margin));
         f.push_back(out.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
                                                 : "An experiment that would separate them: " + experiment_list(out.tie_experiments) + ".");
