@@ -449,7 +449,9 @@ std::vector<Drift> drifts_of(const std::vector<SegmentConditions>& segments, con
             const double r = sxy / std::sqrt(sxx * syy);
             if (std::abs(r) > std::abs(best.correlation)) best = {names[p], var.name, r, sxy / sxx};
         }
-        if (std::abs(best.correlation) >= 0.8) out.push_back(best);
+        // Varies beyond the noise: say with what, when one operating condition explains it.
+        if (std::abs(best.correlation) < 0.8) best = {names[p], "", 0.0, 0.0};
+        out.push_back(best);
     }
     return out;
 }
@@ -591,6 +593,12 @@ std::vector<Absorption> absorption_of(const Measurement& data, const ModelSpec& 
         out.push_back(a);
     }
     return out;
+}
+
+const char* unit_of(const std::string& variable) {
+    if (variable.rfind("temp", 0) == 0) return "K";
+    if (variable.find("omega") != std::string::npos) return "rad/s";
+    return "A";
 }
 
 int rank_of(Verdict v) { return static_cast<int>(v); }
@@ -840,8 +848,10 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     for (const auto& n : out.not_tried)
         f.push_back(fmt::format("{} was not tried: it needs the column {}, which the data lack (log it to check this effect).", n.effect, n.column));
     for (const auto& d : out.drifts)
-        f.push_back(fmt::format("The apparent {} drifts with {} across segments (r = {:.2f}, slope {:.3g} per unit).", d.parameter, d.variable, d.correlation,
-                                d.slope));
+        if (!d.variable.empty())
+            f.push_back(fmt::format("The apparent {} drifts with {} across segments (r = {:.2f}, {:.3g} {} per {}).", d.parameter, d.variable,
+                                    d.correlation, d.slope, out.model.units[static_cast<std::size_t>(out.model.index_of(d.parameter))],
+                                    unit_of(d.variable)));
     return out;
 }
 

@@ -114,10 +114,12 @@ struct SegmentConditions {
     std::vector<ApparentValue> apparent;                  // per free parameter of the model
 };
 
+// An apparent parameter that varies between segments beyond the noise, and the operating condition
+// it follows (|r| >= 0.8), if one does.
 struct Drift {
-    std::string parameter, variable;  // "Rs", "temp_winding"
+    std::string parameter, variable;  // "Rs", "temp_winding"; variable empty: follows none alone
     double correlation = 0.0;
-    double slope = 0.0;               // per unit of the variable
+    double slope = 0.0;               // parameter unit per unit of the variable
 };
 
 struct Diagnosis {

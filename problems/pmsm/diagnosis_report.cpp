@@ -437,7 +437,7 @@ json diagnosis_json(const Diagnosis& d) {
     out["segments"] = segments;
     json drifts = json::array();
     for (const auto& x : d.drifts)
-        drifts.push_back({{"parameter", x.parameter}, {"with", x.variable}, {"correlation", x.correlation}, {"slope", x.slope}});
+        drifts.push_back({{"parameter", x.parameter}, {"with", x.variable.empty() ? json(nullptr) : json(x.variable)}, {"correlation", x.correlation}, {"slope", x.slope}});
     out["drifts"] = drifts;
     return out;
 }
@@ -537,7 +537,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     if (d.steps.size() > 1) md += "---|";
     md += "---|---|---|\n";
     for (const auto& s : d.segments) {
-        md += fmt::format("| {} | {:.4g} | {:.4g} | {:.4g} |", s.label, s.omega, s.i_d, s.i_q);
+        md += fmt::format("| {} | {:.2f} | {:.4f} | {:.4f} |", s.label, s.omega, s.i_d, s.i_q);
         if (tw) md += fmt::format(" {:.1f} |", *s.temp_winding);
         if (tm) md += fmt::format(" {:.1f} |", *s.temp_magnet);
         if (d.steps.size() > 1) md += fmt::format(" {} |", mv(s.before.rms.total));
@@ -578,9 +578,13 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
         md += "\n";
     }
     md += "\n";
-    if (d.drifts.empty()) md += "No apparent parameter drifts beyond its noise with temperature, current or speed.\n\n";
+    if (d.drifts.empty()) md += "No apparent parameter varies between segments beyond its noise.\n\n";
     for (const auto& x : d.drifts)
-        md += fmt::format("- apparent {} follows {} (r = {:.2f}, slope {:.4g} per unit of {}).\n", x.parameter, x.variable, x.correlation, x.slope, x.variable);
+        md += x.variable.empty()
+                  ? fmt::format("- apparent {} varies between segments beyond its noise, following none of temperature, current or speed alone.\n",
+                                x.parameter)
+                  : fmt::format("- apparent {} follows {} (r = {:.2f}, slope {:.4g} per unit of {}).\n", x.parameter, x.variable, x.correlation,
+                                x.slope, x.variable);
     md += "\n" + image(apparent_png, "parameters refitted per segment");
 
     md += "## Which effect is missing\n\n";
