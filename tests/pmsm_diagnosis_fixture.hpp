@@ -1,20 +1,18 @@
 #pragma once
 // Simulated drive data with hidden effects for the fit and diagnosis tests, made once per process
 // and shared between test cases (each simulation is a few hundred milliseconds).
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
-#include <sys/wait.h>
-
 #include "problems/pmsm/diagnosis.hpp"
 #include "problems/pmsm/simulation_profile.hpp"
+#include "tests/mhbench_cli.hpp"
 
 namespace mhb::pmsm::testing {
+
+using mhb::testing::run_mhbench;
 
 struct HiddenEffect {
     std::string name;
@@ -47,20 +45,6 @@ inline const Measurement& diagnosis_data(const std::vector<HiddenEffect>& effect
     std::string key = "diagnosis";
     for (const auto& e : effects) key += "+" + e.name;
     return simulated(key, "diagnosis_profile.toml", effects);
-}
-
-struct CliRun {
-    int exit_code;
-    std::string output;  // stdout and stderr
-};
-
-inline CliRun run_mhbench(const std::string& arguments, const std::filesystem::path& log) {
-    const std::string command = std::string(MHBENCH_CLI) + " " + arguments + " > " + log.string() + " 2>&1";
-    const int status = std::system(command.c_str());
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
 }
 
 }  // namespace mhb::pmsm::testing
