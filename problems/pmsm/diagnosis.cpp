@@ -821,10 +821,13 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     for (const auto& c : out.candidates)
         if (c.verdict == Verdict::NotIdentifiable) hidden.push_back(c.effect);
     if (!hidden.empty()) {
-        std::string text = fmt::format("Not identifiable from this data (absorbed by the model's parameters without trace): {}.", join(hidden));
+        f.push_back(fmt::format("Not identifiable from this data (absorbed by the model's parameters without trace): {}.", join(hidden)));
         for (const auto& c : out.candidates) {
             if (c.verdict != Verdict::NotIdentifiable) continue;
-            if (!c.experiments.empty()) text += fmt::format(" {} would show with {}.", c.effect, experiment_list(c.experiments));
+            std::string text = c.effect + ": ";
+            text += c.experiments.empty() ? std::string("none of the extra operating points tried, alone or together, would make a tenth of its "
+                                                        "signature its own.")
+                                          : "would show with " + experiment_list(c.experiments) + ".";
             // The parameter that moves the base parameters most says the most about what is at stake.
             const Absorption* largest = nullptr;
             for (const auto& a : c.absorption)
@@ -842,8 +845,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
                     text += fmt::format("; at {} = {:.3g} {} would reach zero", largest->parameter, value, name);
                 text += ".";
             }
+            f.push_back(text);
         }
-        f.push_back(text);
     }
     for (const auto& n : out.not_tried)
         f.push_back(fmt::format("{} was not tried: it needs the column {}, which the data lack (log it to check this effect).", n.effect, n.column));
