@@ -464,11 +464,11 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
 std::string diagnosis_text(const Diagnosis& d) {
     std::string t = fmt::format("data: {} ({} samples in {} segments)\nmodel: {}: residual rms u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n\n",
                                 d.source, d.samples, d.segments.size(), d.model.spec.text(), d.model.rms.d, d.model.rms.q, d.model.rms.total);
-    t += fmt::format("{:<4} {:<16} {:<17} {:>12} {:>11} {:>12} {:<17}\n", "rank", "added effect", "verdict", "rms after (V)", "dBIC", "LOSO (V)",
+    t += fmt::format("{:<4} {:<16} {:<17} {:>12} {:>11} {:>12} {}\n", "rank", "added effect", "verdict", "rms after (V)", "dBIC", "LOSO (V)",
                      "identifiability");
     for (std::size_t k = 0; k < d.candidates.size(); ++k) {
         const auto& c = d.candidates[k];
-        t += fmt::format("{:<4} {:<16} {:<17} {:>12.4g} {:>11.1f} {:>12} {:<17}\n", k + 1, c.effect, to_string(c.verdict), c.fit.rms.total, c.delta_bic,
+        t += fmt::format("{:<4} {:<16} {:<17} {:>12.4g} {:>11.1f} {:>12} {}\n", k + 1, c.effect, to_string(c.verdict), c.fit.rms.total, c.delta_bic,
                          c.loso_rms ? fmt::format("{:.4g}", *c.loso_rms) : std::string("—"), to_string(c.identifiability));
     }
     t += "\n";
