@@ -91,6 +91,8 @@ double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const 
 // line through time, so that the noise cannot make an effect look identifiable.
 Measurement design_of(const Measurement& data) {
     Measurement d = data;
+    // Without segments the operating points are unknown: the samples themselves are the design.
+    if (!data.has_segments()) return d;
     for (const auto& r : segment_ranges(data)) {
         for (auto* column : {&d.i_d, &d.i_q, &d.omega_e}) column->segment(r.first, r.rows).setConstant(column->segment(r.first, r.rows).mean());
         for (auto* column : {&d.temp_winding, &d.temp_magnet}) {
@@ -779,7 +781,11 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
         f.push_back(fmt::format("Before the effects (base model) the residual was {:.4g} V rms; with them it is {:.4g} V ({}).", out.steps.front().rms.total,
                                 m.rms.total, percent(m.rms.total / out.steps.front().rms.total - 1.0)));
     const int unknowns = static_cast<int>(m.free_count());
-    if (out.mean_equations <= unknowns)
+    if (!data.has_segments())
+        f.push_back("The data have no segment column, so the operating points are unknown: leave-one-segment-out prediction and the "
+                    "segment-mean test are not available, and identifiability is judged on the raw samples, where noise can make an effect "
+                    "look identifiable. Add a segment column (docs/data-format.md).");
+    else if (out.mean_equations <= unknowns)
         f.push_back(fmt::format(
             "The {} operating points give {} segment-mean equations for the {} free parameters of {}: any effect without an angle or "
             "temperature signature is absorbed into these parameters without leaving a residual, and cannot be checked on this data.",
