@@ -625,7 +625,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     bool said = false;
     if (!d.tie.empty()) {
         md += fmt::format("- **Near tie** between {}: the evidence cannot order them.", fmt::format("{}", fmt::join(d.tie, ", ")));
-        for (const auto& e : d.tie_experiments) md += fmt::format(" {} ({}) would separate them.", e.name, e.description);
+        for (const auto& e : d.tie_experiments) md += fmt::format(" Measuring {} ({}) would separate them.", e.name, e.description);
         md += "\n";
         said = true;
     }
@@ -635,7 +635,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
         md += fmt::format("- `{}` is {} on this design: {:.2g} of its signature lies outside what `{}` can absorb.", c.effect, to_string(c.identifiability),
                           c.unique_fraction, m.spec.text());
         for (const auto& e : c.experiments)
-            md += fmt::format(" {} ({}) would raise that to {:.2f}.", e.name, e.description, e.unique_after);
+            md += fmt::format(" With {} ({}) it would be {:.2f}.", e.name, e.description, e.unique_after);
         for (const auto& a : c.absorption) {
             md += fmt::format(" At a typical {} = {:.4g}: Rs {}, Ld {}, Lq {}, psi_f {} (residual change {:.2g} noise variances)", a.parameter, a.typical,
                               fmt::format("{:+.1f} %", 100 * a.base_shift[0]), fmt::format("{:+.1f} %", 100 * a.base_shift[1]),
