@@ -1,29 +1,18 @@
 #include <catch2/catch.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include <sys/wait.h>
-
 #include "problems/pmsm/measurement.hpp"
+#include "tests/mhbench_cli.hpp"
 
 namespace {
 
-struct Run {
-    int exit_code;
-    std::string output;  // stdout and stderr
-};
+using Run = mhb::testing::CliRun;
 
 Run run_cli(const std::string& arguments) {
-    const auto log = std::filesystem::temp_directory_path() / "mhbench_simulate_cli.log";
-    const std::string command = std::string(MHBENCH_CLI) + " " + arguments + " > " + log.string() + " 2>&1";
-    const int status = std::system(command.c_str());
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+    return mhb::testing::run_mhbench(arguments, std::filesystem::temp_directory_path() / "mhbench_simulate_cli.log");
 }
 
 const std::filesystem::path work = std::filesystem::temp_directory_path() / "mhbench_simulate_cli";

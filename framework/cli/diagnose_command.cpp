@@ -1,0 +1,64 @@
+// `mhbench diagnose --data D.csv --model MODEL [--json OUT] [--report DIR]`: fits MODEL, then says
+// where it fails, which library effect is most likely missing and how sure that is
+// (docs/effects.md, "How diagnose decides"; docs/tutorial-missing-physics.md).
+#include <fstream>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "framework/cli/commands.hpp"
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/diagnosis_report.hpp"
+
+namespace mhb::cli {
+namespace {
+
+struct DiagnoseCommandOptions {
+    std::string data, model = "base", json, report, optimizer = "cmaes";
+    double settle = 0.0;
+    std::int64_t evaluations = 0;
+    std::uint64_t seed = 1;
+};
+
+const bool registered = register_command("diagnose", [](CLI::App& app) {
+    auto* cmd = app.add_subcommand("diagnose", "Diagnose a PMSM model against measurements: where it fails, which effect is missing, how sure");
+    auto o = std::make_shared<DiagnoseCommandOptions>();
+    cmd->add_option("--data", o->data, "measurement CSV (docs/data-format.md)")->required();
+    cmd->add_option("--model", o->model, "model to diagnose, e.g. base or base+deadtime (docs/effects.md)");
+    cmd->add_option("--optimizer", o->optimizer, "optimizer searching the nonlinear effect parameters");
+    cmd->add_option("--evaluations", o->evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)");
+    cmd->add_option("--seed", o->seed, "optimizer seed");
+    cmd->add_option("--settle", o->settle, "drop this many seconds after each segment start (needs t, segment)");
+    cmd->add_option("--json", o->json, "write the diagnosis as JSON here");
+    cmd->add_option("--report", o->report, "write report.md with PNG plots into this directory");
+    return std::function<int()>([o] {
+        const auto spec = pmsm::parse_model_spec(o->model);
+        OptimizerRegistry::instance().at(o->optimizer, "optimizer");
+        auto data = pmsm::read_settled_measurement(o->data, o->settle);
+        pmsm::DiagnosisOptions options;
+        options.fit.optimizer = o->optimizer;
+        options.fit.evaluations = o->evaluations;
+        options.fit.seed = o->seed;
+        const auto diagnosis = pmsm::diagnose(data, spec, options);
+        fmt::print("{}", pmsm::diagnosis_text(diagnosis));
+        if (diagnosis.winner)
+            fmt::print("\nnext: mhbench fit --data {} --model {}\n", o->data, spec.with(*diagnosis.winner).text());
+        if (!o->json.empty()) {
+            auto out = pmsm::diagnosis_json(diagnosis);
+            out["data"] = o->data;
+            std::ofstream(o->json) << out.dump(2) << "\n";
+            fmt::print("\nJSON: {}\n", o->json);
+        }
+        if (!o->report.empty()) {
+            const auto outcome = pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data);
+            fmt::print("{}report: {} ({} plots)\n", o->json.empty() ? "\n" : "", outcome.markdown.string(), outcome.images.size());
+            for (const auto& note : outcome.notes) fmt::print("note: {}\n", note);
+        }
+        return exit_ok;
+    });
+});
+
+}  // namespace
+}  // namespace mhb::cli

@@ -1,0 +1,867 @@
+#include "problems/pmsm/diagnosis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <fmt/format.h>
+
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+// Evidence thresholds (docs/effects.md, "How diagnose decides").
+constexpr double supported_bic = -10.0;   // "very strong" on Kass and Raftery's scale of 2 ln B
+constexpr double weak_bic = -2.0;
+constexpr double tie_margin = 6.0;        // below "strong" preference between two candidates
+constexpr double absorbed_below = 1e-6;   // unique fraction: in the span of the model's columns
+constexpr double clear_above = 0.1;       // unique fraction: at least a tenth of the signature is its own
+constexpr double significance = 1e-3;
+
+struct Range {
+    Eigen::Index first = 0, rows = 0;
+};
+
+std::vector<Range> segment_ranges(const Measurement& m) {
+    std::vector<Range> out;
+    Eigen::Index begin = 0;
+    for (Eigen::Index k = 1; k <= m.size(); ++k)
+        if (k == m.size() || (m.has_segments() && m.segment[k] != m.segment[k - 1])) {
+            out.push_back({begin, k - begin});
+            begin = k;
+        }
+    return out;
+}
+
+double chi_squared_survival(double statistic, double dof) {
+    if (dof <= 0.0) return 1.0;
+    return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), std::max(statistic, 0.0)));
+}
+
+std::string percent(double relative) { return fmt::format("{:+.1f} %", 100.0 * relative); }
+
+// ---- noise ----
+
+NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
+    const Eigen::Index n = data.size();
+    const auto ranges = segment_ranges(data);
+    Eigen::VectorXd within = fit.residual;
+    for (int a = 0; a < 2; ++a)
+        for (const auto& r : ranges) {
+            auto block = within.segment(a * n + r.first, r.rows);
+            block.array() -= block.mean();
+        }
+    Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(2 * n, 2);
+    phi.col(0).head(n).setOnes();
+    phi.col(1).tail(n).setOnes();
+    RowLayout layout;
+    layout.samples = n;
+    layout.axes = 2;
+    if (data.has_segments()) layout.block = data.segment;
+    const auto u = parameter_uncertainty(phi, within, Eigen::Vector2d::Zero(), layout, CovarianceMethod::NeweyWest);
+    NoiseEstimate noise;
+    noise.model = fit.spec.text();
+    for (int a = 0; a < 2; ++a) {
+        noise.sigma[a] = std::sqrt(within.segment(a * n, n).squaredNorm() / static_cast<double>(n));
+        noise.long_run[a] = std::sqrt(std::max(u.covariance(a, a), 0.0) * static_cast<double>(n));
+        // Correlation can only cost information here; a negative one is taken as none.
+        noise.long_run[a] = std::max(noise.long_run[a], noise.sigma[a]);
+        noise.effective_samples += static_cast<double>(n) * std::pow(noise.sigma[a] / noise.long_run[a], 2);
+    }
+    return noise;
+}
+
+double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const NoiseEstimate& noise) {
+    double lr = 0.0;
+    for (int a = 0; a < 2; ++a) lr += (model.rss_axis(a) - candidate.rss_axis(a)) / (noise.long_run[a] * noise.long_run[a]);
+    return lr / noise.dispersion;
+}
+
+// ---- the design: what the operating points, the angle and the temperature trend can tell ----
+
+// The data with each segment's currents and speed at their means and its temperatures on a straight
+// line through time, so that the noise cannot make an effect look identifiable.
+Measurement design_of(const Measurement& data) {
+    Measurement d = data;
+    // Without segments the operating points are unknown: the samples themselves are the design.
+    if (!data.has_segments()) return d;
+    for (const auto& r : segment_ranges(data)) {
+        for (auto* column : {&d.i_d, &d.i_q, &d.omega_e}) column->segment(r.first, r.rows).setConstant(column->segment(r.first, r.rows).mean());
+        for (auto* column : {&d.temp_winding, &d.temp_magnet}) {
+            if (!*column || r.rows < 2) continue;
+            auto block = (*column)->segment(r.first, r.rows);
+            const Eigen::ArrayXd x = Eigen::ArrayXd::LinSpaced(r.rows, 0.0, static_cast<double>(r.rows - 1));
+            const double xm = x.mean(), ym = block.mean();
+            const double slope = ((x - xm) * (block.array() - ym)).sum() / (x - xm).square().sum();
+            block = (ym + slope * (x - xm)).matrix();
+        }
+    }
+    return d;
+}
+
+struct OperatingPoint {
+    double omega = 0.0, i_d = 0.0, i_q = 0.0, temp_winding = 0.0, temp_magnet = 0.0;
+};
+
+// Appends a hypothetical held operating point: one electrical period of the angle when the data log
+// it (so angle signatures show), two rows otherwise.
+Measurement with_point(const Measurement& design, const OperatingPoint& p) {
+    Measurement d = design;
+    const Eigen::Index n = design.size(), m = design.theta_e ? 72 : 2;
+    auto grow = [&](Eigen::VectorXd& v, double value) {
+        v.conservativeResize(n + m);
+        v.tail(m).setConstant(value);
+    };
+    grow(d.i_d, p.i_d);
+    grow(d.i_q, p.i_q);
+    grow(d.omega_e, p.omega);
+    grow(d.u_d, 0.0);
+    grow(d.u_q, 0.0);
+    if (d.t) grow(*d.t, 0.0);
+    if (d.temp_winding) grow(*d.temp_winding, p.temp_winding);
+    if (d.temp_magnet) grow(*d.temp_magnet, p.temp_magnet);
+    if (d.theta_e) {
+        grow(*d.theta_e, 0.0);
+        for (Eigen::Index k = 0; k < m; ++k)
+            (*d.theta_e)[n + k] = wrap_angle(2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(m));
+    }
+    if (d.has_segments()) {
+        d.segment.conservativeResize(n + m);
+        d.segment.tail(m).setConstant(static_cast<int>(d.segment_labels.size()));
+        d.segment_labels.push_back("hypothetical");
+    }
+    return d;
+}
+
+// The design with a logged angle: one electrical period swept through each segment.
+Measurement with_angle(const Measurement& design) {
+    Measurement d = design;
+    d.theta_e = Eigen::VectorXd(d.size());
+    for (const auto& r : segment_ranges(d))
+        for (Eigen::Index k = 0; k < r.rows; ++k)
+            (*d.theta_e)[r.first + k] = wrap_angle(2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(r.rows));
+    return d;
+}
+
+// Fraction of `column` outside the span of `others` (columns scaled first; rank-revealing QR).
+double unique_fraction(const Eigen::MatrixXd& others, const Eigen::VectorXd& column) {
+    const double norm = column.norm();
+    if (!(norm > 0.0)) return nan;
+    if (others.cols() == 0) return 1.0;
+    Eigen::MatrixXd scaled = others;
+    for (Eigen::Index j = 0; j < scaled.cols(); ++j) {
+        const double s = scaled.col(j).norm();
+        if (s > 0.0) scaled.col(j) /= s;
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
+    qr.setThreshold(1e-10);
+    const Eigen::Index rank = qr.rank();
+    Eigen::VectorXd coefficients = qr.householderQ().adjoint() * column;
+    coefficients.tail(coefficients.size() - rank).setZero();
+    const Eigen::VectorXd projected = qr.householderQ() * coefficients;
+    return (column - projected).norm() / norm;
+}
+
+// Unique fraction of each free parameter of `effect` in the model `spec`+`effect`(+`rival`) on
+// `design`, against the model's own free parameters (and the rival's). Effect parameters are taken
+// at their declared typical (default) values, the model's at `model_values`.
+std::vector<double> design_unique_fractions(const Measurement& design, const ModelSpec& spec, const Eigen::VectorXd& model_values,
+                                            const std::string& effect, const std::string& rival = {}) {
+    ModelSpec full = spec.with(effect);
+    if (!rival.empty()) full = full.with(rival);
+    const auto model = make_model(full, design);
+    Eigen::VectorXd values = model->parameters_of(MotorParameters{});
+    values.head(model_values.size()) = model_values;
+    const auto free = free_parameters(full);
+    const auto base_count = static_cast<Eigen::Index>(free_parameters(spec).size());
+    const auto effect_count = static_cast<Eigen::Index>(free_parameters(spec.with(effect)).size()) - base_count;
+    std::vector<Eigen::Index> columns, own;
+    for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(free.size()); ++j) {
+        if (!free[static_cast<std::size_t>(j)]) continue;
+        columns.push_back(j);
+        const bool is_effect = j >= base_count && j < base_count + effect_count;
+        if (is_effect) own.push_back(static_cast<Eigen::Index>(columns.size()) - 1);
+    }
+    const Eigen::MatrixXd jacobian = prediction_jacobian(*model, values, columns);
+    std::vector<Eigen::Index> others;
+    for (Eigen::Index c = 0; c < jacobian.cols(); ++c)
+        if (std::find(own.begin(), own.end(), c) == own.end()) others.push_back(c);
+    Eigen::MatrixXd other_columns(jacobian.rows(), static_cast<Eigen::Index>(others.size()));
+    for (std::size_t c = 0; c < others.size(); ++c) other_columns.col(static_cast<Eigen::Index>(c)) = jacobian.col(others[c]);
+    std::vector<double> out;
+    for (const auto c : own) out.push_back(unique_fraction(other_columns, jacobian.col(c)));
+    return out;
+}
+
+double most_distinct(const std::vector<double>& fractions) {
+    double best = nan;
+    for (double f : fractions)
+        if (std::isfinite(f) && !(f <= best)) best = f;
+    return best;
+}
+
+struct Proposal {
+    Experiment experiment;
+    std::function<Measurement(const Measurement&)> apply;
+};
+
+std::vector<Proposal> experiment_proposals(const Measurement& data, const std::vector<SegmentConditions>& segments) {
+    std::vector<Proposal> out;
+    if (segments.empty()) return out;
+    const auto fastest = *std::max_element(segments.begin(), segments.end(),
+                                           [](const auto& a, const auto& b) { return std::abs(a.omega) < std::abs(b.omega); });
+    double largest_current = 0.0, lowest_i_d = 0.0;
+    for (const auto& s : segments) {
+        largest_current = std::max(largest_current, std::hypot(s.i_d, s.i_q));
+        lowest_i_d = std::min(lowest_i_d, s.i_d);
+    }
+    if (!(largest_current > 0.0)) largest_current = 1.0;
+    const OperatingPoint base{fastest.omega, fastest.i_d, fastest.i_q, fastest.temp_winding.value_or(reference_temperature),
+                              fastest.temp_magnet.value_or(reference_temperature)};
+    auto add = [&](std::string name, OperatingPoint p) {
+        // Currents that are zero up to the noise of the segment means read as zero.
+        for (double* i : {&p.i_d, &p.i_q})
+            if (std::abs(*i) < 1e-3 * largest_current) *i = 0.0;
+        const std::string where = fmt::format("omega_e = {:.3g} rad/s, i_d = {:.3g} A, i_q = {:.3g} A", p.omega, p.i_d, p.i_q);
+        out.push_back({{std::move(name), where, 0.0}, [p](const Measurement& d) { return with_point(d, p); }});
+    };
+    OperatingPoint p = base;
+    p.omega = base.omega / 2.0;
+    add("another speed", p);
+    p = base;
+    p.omega = -base.omega;
+    p.i_q = -base.i_q;
+    add("the other direction", p);
+    p = base;
+    p.i_d = lowest_i_d - 0.5 * largest_current;
+    add("another d-axis current", p);
+    p = base;
+    p.i_q = base.i_q + (base.i_q < 0.0 ? -0.5 : 0.5) * largest_current;
+    add("another load", p);
+    if (data.temp_winding || data.temp_magnet) {
+        p = base;
+        p.temp_winding += 30.0;
+        p.temp_magnet += 30.0;
+        out.push_back({{"a temperature change", fmt::format("the fastest point again 30 K warmer (omega_e = {:.3g} rad/s)", p.omega), 0.0},
+                       [p](const Measurement& d) { return with_point(d, p); }});
+    }
+    if (!data.theta_e)
+        out.push_back({{"logging theta_e", "the controller's electrical angle with every sample", 0.0},
+                       [](const Measurement& d) { return with_angle(d); }});
+    return out;
+}
+
+// Experiments after which `effect` (against `rival` too, when given, and the rival against it) has
+// at least a tenth of its signature to itself.
+std::vector<Experiment> revealing_experiments(const Measurement& design, const std::vector<Proposal>& proposals, const ModelSpec& spec,
+                                              const Eigen::VectorXd& model_values, const std::string& effect,
+                                              const std::string& rival = {}) {
+    auto clarity = [&](const Measurement& d) {
+        double u = most_distinct(design_unique_fractions(d, spec, model_values, effect, rival));
+        if (!rival.empty()) u = std::min(u, most_distinct(design_unique_fractions(d, spec, model_values, rival, effect)));
+        return u;
+    };
+    std::vector<Experiment> out;
+    for (const auto& p : proposals) {
+        Experiment e = p.experiment;
+        e.unique_after = clarity(p.apply(design));
+        if (e.unique_after >= clear_above) out.push_back(e);
+    }
+    if (out.empty() && proposals.size() > 1) {
+        Measurement all = design;
+        std::string names;
+        for (const auto& p : proposals) {
+            all = p.apply(all);
+            names += (names.empty() ? "" : ", ") + p.experiment.name;
+        }
+        const double u = clarity(all);
+        if (u >= clear_above) out.push_back({"all of these together", names, u});
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.unique_after > b.unique_after; });
+    return out;
+}
+
+// ---- prediction, plausibility ----
+
+// Squared prediction error of each segment when the model is refitted (locally, from `values`) on
+// all the others; empty with fewer than three segments.
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values) {
+    const auto ranges = segment_ranges(data);
+    std::vector<double> sse;
+    if (ranges.size() < 3) return sse;
+    for (const auto& held : ranges) {
+        std::vector<Eigen::Index> train, test;
+        for (Eigen::Index k = 0; k < data.size(); ++k) (k >= held.first && k < held.first + held.rows ? test : train).push_back(k);
+        const auto training = make_model(spec, select_rows(data, train));
+        const Eigen::VectorXd fitted = refine_parameters(*training, spec, values);
+        const auto testing = make_model(spec, select_rows(data, test));
+        Eigen::VectorXd y(2 * testing->data().size());
+        y << testing->data().u_d, testing->data().u_q;
+        sse.push_back((y - predict_stacked(*testing, fitted)).squaredNorm());
+    }
+    return sse;
+}
+
+double pooled_rms(const std::vector<double>& sse, Eigen::Index samples) {
+    double total = 0.0;
+    for (double v : sse) total += v;
+    return std::sqrt(total / (2.0 * static_cast<double>(samples)));
+}
+
+void check_base(const ModelFit& fit, std::vector<std::string>& problems) {
+    const Bounds box = base_parameter_bounds();
+    for (int j = 0; j < 4; ++j) {
+        const double v = fit.values[j];
+        if (!(v > 0.0))
+            problems.push_back(fmt::format("{} = {:.4g} {} is physically impossible (not positive)", fit.names[static_cast<std::size_t>(j)], v,
+                                           fit.units[static_cast<std::size_t>(j)]));
+        else if (v < box.lower[j] || v > box.upper[j])
+            problems.push_back(fmt::format("{} = {:.4g} {} is outside Table 2's box [{:g}, {:g}]", fit.names[static_cast<std::size_t>(j)], v,
+                                           fit.units[static_cast<std::size_t>(j)], box.lower[j], box.upper[j]));
+    }
+}
+
+void check_effects(const ModelFit& fit, std::vector<std::string>& problems) {
+    for (Eigen::Index j = 4; j < fit.values.size(); ++j) {
+        if (!fit.at_bound(j)) continue;
+        const bool at_lower = fit.values[j] <= fit.range_lower[j] + 1e-9 * (fit.range_upper[j] - fit.range_lower[j]);
+        // Zero is a magnitude's natural floor (no band, no harmonic, no delay), not an implausible value.
+        if (at_lower && fit.range_lower[j] == 0.0) continue;
+        problems.push_back(fmt::format("{} = {:.4g} {} sits at the {} end of its plausible range [{:g}, {:g}]",
+                                       fit.names[static_cast<std::size_t>(j)], fit.values[j], fit.units[static_cast<std::size_t>(j)],
+                                       at_lower ? "lower" : "upper", fit.range_lower[j], fit.range_upper[j]));
+    }
+}
+
+// ---- where the model fails ----
+
+std::vector<SegmentConditions> segment_conditions(const Measurement& data, const ModelFit& model, const ModelFit* before) {
+    std::vector<SegmentConditions> out;
+    for (std::size_t s = 0; s < model.segments.size(); ++s) {
+        const auto& seg = model.segments[s];
+        SegmentConditions c;
+        c.label = seg.label;
+        c.first = seg.first;
+        c.rows = seg.rows;
+        auto mean = [&](const Eigen::VectorXd& v) { return v.segment(seg.first, seg.rows).mean(); };
+        c.omega = mean(data.omega_e);
+        c.i_d = mean(data.i_d);
+        c.i_q = mean(data.i_q);
+        if (data.temp_winding) c.temp_winding = mean(*data.temp_winding);
+        if (data.temp_magnet) c.temp_magnet = mean(*data.temp_magnet);
+        if (data.t) c.time = mean(*data.t);
+        c.model = seg;
+        c.before = before ? before->segments[s] : seg;
+        out.push_back(c);
+    }
+    return out;
+}
+
+// Each free parameter refitted alone on each segment, the others held at the global fit: the value
+// that segment asks for. A drift of these with temperature, current or speed shows what is missing.
+void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const NoiseEstimate& noise, std::vector<SegmentConditions>& segments,
+                     std::vector<std::string>& names) {
+    std::vector<Eigen::Index> columns;
+    for (Eigen::Index j = 0; j < fit.values.size(); ++j)
+        if (fit.free[static_cast<std::size_t>(j)]) {
+            columns.push_back(j);
+            names.push_back(fit.names[static_cast<std::size_t>(j)]);
+        }
+    const Eigen::MatrixXd jacobian = prediction_jacobian(model, fit.values, columns);
+    const Eigen::Index n = fit.samples;
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        std::vector<double> strength;
+        for (auto& s : segments) {
+            const auto jd = jacobian.col(static_cast<Eigen::Index>(c)).segment(s.first, s.rows);
+            const auto jq = jacobian.col(static_cast<Eigen::Index>(c)).segment(n + s.first, s.rows);
+            strength.push_back(std::sqrt((jd.squaredNorm() + jq.squaredNorm()) / static_cast<double>(s.rows)));
+        }
+        const double strongest = *std::max_element(strength.begin(), strength.end());
+        for (std::size_t k = 0; k < segments.size(); ++k) {
+            auto& s = segments[k];
+            const auto jd = jacobian.col(static_cast<Eigen::Index>(c)).segment(s.first, s.rows);
+            const auto jq = jacobian.col(static_cast<Eigen::Index>(c)).segment(n + s.first, s.rows);
+            const double norm2 = jd.squaredNorm() + jq.squaredNorm();
+            ApparentValue a;
+            a.determined = strength[k] > 0.05 * strongest && norm2 > 0.0;
+            if (a.determined) {
+                const double step = (jd.dot(fit.residual.segment(s.first, s.rows)) + jq.dot(fit.residual.segment(n + s.first, s.rows))) / norm2;
+                a.value = fit.values[columns[c]] + step;
+                a.standard_error = std::sqrt(std::pow(noise.long_run[0], 2) * jd.squaredNorm() +
+                                             std::pow(noise.long_run[1], 2) * jq.squaredNorm()) / norm2;
+            }
+            s.apparent.push_back(a);
+        }
+    }
+}
+
+std::vector<Drift> drifts_of(const std::vector<SegmentConditions>& segments, const std::vector<std::string>& names) {
+    std::vector<Drift> out;
+    struct Variable {
+        const char* name;
+        std::function<std::optional<double>(const SegmentConditions&)> of;
+    };
+    const std::vector<Variable> variables{
+        {"temp_winding", [](const SegmentConditions& s) { return s.temp_winding; }},
+        {"temp_magnet", [](const SegmentConditions& s) { return s.temp_magnet; }},
+        {"|i|", [](const SegmentConditions& s) { return std::optional<double>(std::hypot(s.i_d, s.i_q)); }},
+        {"i_d", [](const SegmentConditions& s) { return std::optional<double>(s.i_d); }},
+        {"i_q", [](const SegmentConditions& s) { return std::optional<double>(s.i_q); }},
+        {"omega_e", [](const SegmentConditions& s) { return std::optional<double>(s.omega); }},
+        {"|omega_e|", [](const SegmentConditions& s) { return std::optional<double>(std::abs(s.omega)); }},
+    };
+    for (std::size_t p = 0; p < names.size(); ++p) {
+        std::vector<double> v, se;
+        std::vector<std::size_t> which;
+        for (std::size_t k = 0; k < segments.size(); ++k)
+            if (segments[k].apparent[p].determined) {
+                v.push_back(segments[k].apparent[p].value);
+                se.push_back(segments[k].apparent[p].standard_error);
+                which.push_back(k);
+            }
+        if (v.size() < 4) continue;
+        // Is the spread more than the noise allows?
+        double wsum = 0.0, wmean = 0.0;
+        for (std::size_t k = 0; k < v.size(); ++k) {
+            wsum += 1.0 / (se[k] * se[k]);
+            wmean += v[k] / (se[k] * se[k]);
+        }
+        wmean /= wsum;
+        double spread = 0.0;
+        for (std::size_t k = 0; k < v.size(); ++k) spread += std::pow((v[k] - wmean) / se[k], 2);
+        if (chi_squared_survival(spread, static_cast<double>(v.size() - 1)) > significance) continue;
+        Drift best;
+        for (const auto& var : variables) {
+            std::vector<double> x;
+            for (auto k : which)
+                if (auto value = var.of(segments[k])) x.push_back(*value);
+            if (x.size() != v.size()) continue;
+            const Eigen::Map<const Eigen::ArrayXd> xa(x.data(), static_cast<Eigen::Index>(x.size())), ya(v.data(), static_cast<Eigen::Index>(v.size()));
+            const double sxx = (xa - xa.mean()).square().sum(), syy = (ya - ya.mean()).square().sum();
+            if (!(sxx > 0.0) || !(syy > 0.0)) continue;
+            const double sxy = ((xa - xa.mean()) * (ya - ya.mean())).sum();
+            const double r = sxy / std::sqrt(sxx * syy);
+            if (std::abs(r) > std::abs(best.correlation)) best = {names[p], var.name, r, sxy / sxx};
+        }
+        // Varies beyond the noise: say with what, when one operating condition explains it.
+        if (std::abs(best.correlation) < 0.8) best = {names[p], "", 0.0, 0.0};
+        out.push_back(best);
+    }
+    return out;
+}
+
+LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise) {
+    LackOfFit l;
+    const Eigen::Index n = data.size();
+    const auto ranges = segment_ranges(data);
+    // Segment means: each has variance long_run^2 / n_s under noise alone.
+    l.dof = 2 * static_cast<int>(ranges.size()) - static_cast<int>(fit.free_count());
+    l.means_available = l.dof > 0;
+    for (const auto& r : ranges)
+        for (int a = 0; a < 2; ++a)
+            l.statistic += static_cast<double>(r.rows) * std::pow(fit.residual.segment(a * n + r.first, r.rows).mean() / noise.long_run[a], 2);
+    l.p_value = l.means_available ? chi_squared_survival(l.statistic, l.dof) : 1.0;
+    bool significant = l.means_available && l.p_value < significance;
+
+    std::vector<std::string> parts;
+    if (data.theta_e) {
+        // Harmonics of the electrical angle, fitted jointly with the segment means.
+        const int orders = 12;
+        const auto s = static_cast<Eigen::Index>(ranges.size());
+        Eigen::MatrixXd x = Eigen::MatrixXd::Zero(n, s + 2 * orders);
+        for (Eigen::Index k = 0; k < s; ++k) x.col(k).segment(ranges[static_cast<std::size_t>(k)].first, ranges[static_cast<std::size_t>(k)].rows).setOnes();
+        for (int h = 1; h <= orders; ++h) {
+            x.col(s + 2 * (h - 1)) = (static_cast<double>(h) * data.theta_e->array()).cos().matrix();
+            x.col(s + 2 * (h - 1) + 1) = (static_cast<double>(h) * data.theta_e->array()).sin().matrix();
+        }
+        const Eigen::MatrixXd gram = x.transpose() * x;
+        const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(gram);
+        const Eigen::MatrixXd inverse = cod.pseudoInverse();
+        Eigen::MatrixXd coefficients(x.cols(), 2);
+        for (int a = 0; a < 2; ++a) coefficients.col(a) = inverse * (x.transpose() * fit.residual.segment(a * n, n));
+        const double tests = 2.0 * orders;
+        for (int h = 1; h <= orders; ++h) {
+            const Eigen::Index c = s + 2 * (h - 1);
+            Harmonic harmonic;
+            harmonic.order = h;
+            const Eigen::Matrix2d block = inverse.block(c, c, 2, 2);
+            harmonic.standard_error = std::sqrt(0.5 * block.trace()) * 0.5 * (noise.long_run[0] + noise.long_run[1]);
+            double p_min = 1.0;
+            for (int a = 0; a < 2; ++a) {
+                const Eigen::Vector2d ab = coefficients.block(c, a, 2, 1);
+                harmonic.amplitude[a] = ab.norm();
+                const double statistic = ab.dot(block.ldlt().solve(ab)) / (noise.long_run[a] * noise.long_run[a]);
+                p_min = std::min(p_min, block.determinant() > 0.0 ? chi_squared_survival(statistic, 2.0) : 1.0);
+            }
+            harmonic.p_value = p_min;
+            l.harmonics.push_back(harmonic);
+            if (p_min < significance / tests) {
+                significant = true;
+                parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)", h,
+                                            1e3 * harmonic.amplitude[0], 1e3 * harmonic.amplitude[1], 1e3 * harmonic.standard_error));
+            }
+        }
+    }
+    l.significant = significant;
+    if (l.means_available && l.p_value < significance) {
+        // Which operating condition the segment means follow most closely, per axis.
+        const auto segments = segment_residuals(data, fit.residual);
+        for (int a = 0; a < 2; ++a) {
+            std::vector<double> y;
+            for (const auto& seg : segments) y.push_back(seg.mean[a]);
+            auto mean_of = [&](const Eigen::VectorXd& v, std::size_t k) { return v.segment(segments[k].first, segments[k].rows).mean(); };
+            std::vector<std::pair<std::string, std::vector<double>>> shapes;
+            std::vector<double> omega, abs_omega, omega2, id, iq, mag, tw, tm, sign;
+            for (std::size_t k = 0; k < segments.size(); ++k) {
+                const double w = mean_of(data.omega_e, k), d = mean_of(data.i_d, k), q = mean_of(data.i_q, k);
+                omega.push_back(w);
+                abs_omega.push_back(std::abs(w));
+                omega2.push_back(w * std::abs(w));
+                id.push_back(d);
+                iq.push_back(q);
+                mag.push_back(std::hypot(d, q));
+                sign.push_back(w >= 0 ? 1.0 : -1.0);
+                if (data.temp_winding) tw.push_back(mean_of(*data.temp_winding, k));
+                if (data.temp_magnet) tm.push_back(mean_of(*data.temp_magnet, k));
+            }
+            shapes = {{"omega_e", omega}, {"|omega_e|", abs_omega}, {"omega_e |omega_e|", omega2}, {"i_d", id},
+                      {"i_q", iq},        {"|i|", mag},              {"the direction", sign}};
+            if (!tw.empty()) shapes.emplace_back("temp_winding", tw);
+            if (!tm.empty()) shapes.emplace_back("temp_magnet", tm);
+            const Eigen::Map<const Eigen::ArrayXd> ya(y.data(), static_cast<Eigen::Index>(y.size()));
+            std::string best_name;
+            double best_r = 0.0;
+            for (const auto& [name, x] : shapes) {
+                const Eigen::Map<const Eigen::ArrayXd> xa(x.data(), static_cast<Eigen::Index>(x.size()));
+                const double sxx = (xa - xa.mean()).square().sum(), syy = (ya - ya.mean()).square().sum();
+                if (!(sxx > 0.0) || !(syy > 0.0)) continue;
+                const double r = ((xa - xa.mean()) * (ya - ya.mean())).sum() / std::sqrt(sxx * syy);
+                if (std::abs(r) > std::abs(best_r)) {
+                    best_r = r;
+                    best_name = name;
+                }
+            }
+            const double largest = ya.abs().maxCoeff();
+            std::string text = fmt::format("segment means of the {} residual up to {:.3g} mV", a == 0 ? "u_d" : "u_q", 1e3 * largest);
+            if (std::abs(best_r) >= 0.7) text += fmt::format(", following {} (r = {:.2f})", best_name, best_r);
+            parts.insert(parts.begin() + a, text);
+        }
+    }
+    for (const auto& p : parts) l.signature += (l.signature.empty() ? "" : "; ") + p;
+    return l;
+}
+
+// Each parameter of an unidentifiable candidate pinned at a typical value (the others at their
+// defaults), the model refitted around it: how far the base parameters move for no change in residual.
+std::vector<Absorption> absorption_of(const Measurement& data, const ModelSpec& spec, const ModelFit& model, const Candidate& c,
+                                      const NoiseEstimate& noise) {
+    std::vector<Absorption> out;
+    const auto effect = make_effect(c.effect);
+    Eigen::VectorXd y(2 * data.size());
+    y << data.u_d, data.u_q;
+    const auto first = model.values.size();
+    for (Eigen::Index j = first; j < c.fit.values.size(); ++j) {
+        Absorption a;
+        a.parameter = c.fit.names[static_cast<std::size_t>(j)];
+        const double declared = effect->values()[j - first];
+        a.typical = declared != 0.0 ? declared : 0.01 * (c.fit.range_upper[j] - c.fit.range_lower[j]);
+        ModelSpec pinned = spec.with(c.effect);
+        for (std::size_t k = 0; k < effect->parameter_names().size(); ++k)
+            pinned.effects.back().fixed[effect->parameter_names()[k]] =
+                static_cast<Eigen::Index>(k) == j - first ? a.typical : effect->values()[static_cast<Eigen::Index>(k)];
+        const auto pinned_model = make_model(pinned, data);
+        Eigen::VectorXd start = pinned_model->parameters_of(MotorParameters{});
+        start.head(first) = model.values;
+        const Eigen::VectorXd v = refine_parameters(*pinned_model, pinned, start);
+        const Eigen::VectorXd r = y - predict_stacked(*pinned_model, v);
+        for (int axis = 0; axis < 2; ++axis)
+            a.rss_change += (r.segment(axis * data.size(), data.size()).squaredNorm() - model.rss_axis(axis)) / std::pow(noise.long_run[axis], 2);
+        for (int b = 0; b < 4; ++b) {
+            a.base_shift[b] = v[b] / model.values[b] - 1.0;
+            const double slope = (v[b] - model.values[b]) / a.typical;
+            if (slope == 0.0) continue;
+            const double zero = -model.values[b] / slope;
+            if (zero >= c.fit.range_lower[j] && zero <= c.fit.range_upper[j])
+                a.impossible_from.emplace_back(base_parameter_names[static_cast<std::size_t>(b)], zero);
+        }
+        out.push_back(a);
+    }
+    return out;
+}
+
+const char* unit_of(const std::string& variable) {
+    if (variable.rfind("temp", 0) == 0) return "K";
+    if (variable.find("omega") != std::string::npos) return "rad/s";
+    return "A";
+}
+
+int rank_of(Verdict v) { return static_cast<int>(v); }
+
+std::string join(const std::vector<std::string>& items) {
+    std::string out;
+    for (std::size_t k = 0; k < items.size(); ++k) out += (k == 0 ? "" : k + 1 == items.size() ? " and " : ", ") + items[k];
+    return out;
+}
+
+std::string experiment_list(const std::vector<Experiment>& experiments) {
+    std::string out;
+    for (std::size_t k = 0; k < experiments.size(); ++k)
+        out += fmt::format("{}{} ({})", k == 0 ? "" : k + 1 == experiments.size() ? " or " : ", ", experiments[k].name, experiments[k].description);
+    return out;
+}
+
+}  // namespace
+
+const char* to_string(Identifiability level) {
+    switch (level) {
+        case Identifiability::Identifiable: return "identifiable";
+        case Identifiability::MostlyAbsorbed: return "mostly absorbed";
+        case Identifiability::NotIdentifiable: return "not identifiable";
+    }
+    return "?";
+}
+
+const char* to_string(Verdict verdict) {
+    switch (verdict) {
+        case Verdict::Supported: return "supported";
+        case Verdict::Weak: return "weak";
+        case Verdict::NotSupported: return "not supported";
+        case Verdict::Implausible: return "implausible";
+        case Verdict::NotIdentifiable: return "not identifiable";
+    }
+    return "?";
+}
+
+Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const DiagnosisOptions& options) {
+    Diagnosis out;
+    out.source = data.source;
+    out.samples = data.size();
+    if (data.t) out.columns.push_back("t");
+    if (data.has_segments()) out.columns.push_back("segment");
+    if (data.theta_e) out.columns.push_back("theta_e");
+    if (data.temp_winding) out.columns.push_back("temp_winding");
+    if (data.temp_magnet) out.columns.push_back("temp_magnet");
+
+    out.model = fit_model(data, spec, options.fit);
+    for (std::size_t k = 0; k < spec.effects.size(); ++k) out.steps.push_back(fit_model(data, spec.prefix(k), options.fit));
+    out.steps.push_back(out.model);
+    const auto model = make_model(spec, data);
+    const auto ranges = segment_ranges(data);
+    out.mean_equations = 2 * static_cast<int>(ranges.size());
+
+    // Candidates: every library effect not in the model whose columns the data have.
+    for (const auto* entry : EffectRegistry::instance().entries()) {
+        if (spec.contains(entry->name)) continue;
+        try {
+            require_columns(*make_effect(entry->name), data);
+        } catch (const InputError& e) {
+            out.not_tried.push_back({entry->name, e.field()});
+            continue;
+        }
+        Candidate c;
+        c.effect = entry->name;
+        const ModelSpec extended = spec.with(entry->name);
+        const auto extended_model = make_model(extended, data);
+        Eigen::VectorXd start = extended_model->parameters_of(MotorParameters{});
+        start.head(out.model.values.size()) = out.model.values;
+        std::vector<Eigen::Index> search;
+        for (Eigen::Index j = out.model.values.size(); j < start.size(); ++j) search.push_back(j);
+        c.added_parameters = static_cast<int>(search.size());
+        c.fit = fit_model(data, extended, options.fit, &start, search);
+        for (int j = 0; j < 4; ++j) c.base_shift[j] = c.fit.values[j] / out.model.values[j] - 1.0;
+        out.candidates.push_back(std::move(c));
+    }
+
+    // The noise, measured where the residual is smallest.
+    const ModelFit* reference = &out.model;
+    for (const auto& c : out.candidates)
+        if (c.fit.rss() < reference->rss()) reference = &c.fit;
+    out.noise = estimate_noise(data, *reference);
+    // Overdispersion: when even the best model tried leaves segment means that the noise cannot
+    // explain, every likelihood ratio is divided by that excess (Q / dof), as a quasi-likelihood does.
+    const LackOfFit reference_fit = lack_of_fit(data, *reference, out.noise);
+    if (reference_fit.means_available) out.noise.dispersion = std::max(1.0, reference_fit.statistic / reference_fit.dof);
+    const double log_n = std::log(std::max(out.noise.effective_samples, 2.0));
+
+    check_base(out.model, out.base_problems);
+    out.base_plausible = out.base_problems.empty();
+    std::vector<double> model_folds;
+    if (options.leave_one_out) model_folds = leave_one_segment_out(data, spec, out.model.values);
+    if (!model_folds.empty()) out.model_loso_rms = pooled_rms(model_folds, data.size());
+
+    const Measurement design = design_of(data);
+    out.segments = segment_conditions(data, out.model, spec.effects.empty() ? nullptr : &out.steps.front());
+    for (auto& s : out.segments) {
+        const auto r = ranges[static_cast<std::size_t>(&s - out.segments.data())];
+        for (int a = 0; a < 2; ++a) s.mean_standard_error[a] = out.noise.long_run[a] / std::sqrt(static_cast<double>(r.rows));
+    }
+    const auto proposals = experiment_proposals(data, out.segments);
+
+    for (auto& c : out.candidates) {
+        c.likelihood_ratio = likelihood_ratio(out.model, c.fit, out.noise);
+        c.delta_bic = -c.likelihood_ratio + c.added_parameters * log_n;
+        check_base(c.fit, c.implausible);
+        check_effects(c.fit, c.implausible);
+        c.plausible = c.implausible.empty();
+        c.unique_fraction = most_distinct(design_unique_fractions(design, spec, out.model.values, c.effect));
+        c.identifiability = !(c.unique_fraction >= absorbed_below) ? Identifiability::NotIdentifiable
+                            : c.unique_fraction < clear_above    ? Identifiability::MostlyAbsorbed
+                                                                 : Identifiability::Identifiable;
+        if (c.identifiability != Identifiability::Identifiable)
+            c.experiments = revealing_experiments(design, proposals, spec, out.model.values, c.effect);
+        if (c.identifiability == Identifiability::NotIdentifiable) c.absorption = absorption_of(data, spec, out.model, c, out.noise);
+        bool predicts = true;
+        if (!model_folds.empty() && c.identifiability != Identifiability::NotIdentifiable && c.delta_bic < weak_bic) {
+            const auto folds = leave_one_segment_out(data, spec.with(c.effect), c.fit.values);
+            c.loso_rms = pooled_rms(folds, data.size());
+            c.loso_segments = static_cast<int>(folds.size());
+            for (std::size_t k = 0; k < folds.size(); ++k) c.loso_better += folds[k] < model_folds[k] ? 1 : 0;
+            // A majority of held-out segments, not the pooled error: one operating point at the edge of
+            // the range, where a polynomial extrapolates, must not outvote all the others.
+            predicts = 2 * c.loso_better >= c.loso_segments;
+        }
+        if (c.identifiability == Identifiability::NotIdentifiable) c.verdict = Verdict::NotIdentifiable;
+        else if (!c.plausible) c.verdict = Verdict::Implausible;
+        else if (c.delta_bic <= supported_bic && predicts) c.verdict = Verdict::Supported;
+        else if (c.delta_bic <= weak_bic) c.verdict = Verdict::Weak;
+        else c.verdict = Verdict::NotSupported;
+    }
+    std::stable_sort(out.candidates.begin(), out.candidates.end(), [](const Candidate& a, const Candidate& b) {
+        if (rank_of(a.verdict) != rank_of(b.verdict)) return rank_of(a.verdict) < rank_of(b.verdict);
+        return a.delta_bic < b.delta_bic;
+    });
+
+    // Verdicts.
+    out.lack_of_fit = lack_of_fit(data, out.model, out.noise);
+    const bool top_supported = !out.candidates.empty() && out.candidates.front().verdict == Verdict::Supported;
+    out.missing_effect_found = top_supported;
+    if (top_supported) {
+        const auto& top = out.candidates.front();
+        out.tie.push_back(top.effect);
+        for (std::size_t k = 1; k < out.candidates.size(); ++k) {
+            const auto& c = out.candidates[k];
+            if (c.verdict != Verdict::Supported) continue;
+            // A tie: the evidence does not prefer one strongly, or the design cannot tell the two
+            // apart at all (each one's signature lies in the span of the other's and the model's), so
+            // that what separates their scores is parsimony or noise.
+            const bool close = c.delta_bic - top.delta_bic < tie_margin;
+            const bool confounded =
+                !close && std::max(most_distinct(design_unique_fractions(design, spec, out.model.values, c.effect, top.effect)),
+                                   most_distinct(design_unique_fractions(design, spec, out.model.values, top.effect, c.effect))) < clear_above;
+            if (close || confounded) out.tie.push_back(c.effect);
+        }
+        if (out.tie.size() == 1) {
+            out.winner = top.effect;
+            out.tie.clear();
+            out.after_winner = lack_of_fit(data, top.fit, out.noise);
+        } else {
+            out.tie_experiments = revealing_experiments(design, proposals, spec, out.model.values, out.tie[0], out.tie[1]);
+        }
+    }
+    out.not_in_library = !top_supported && out.lack_of_fit.significant;
+
+    apparent_values(*model, out.model, out.noise, out.segments, out.apparent_names);
+    out.drifts = drifts_of(out.segments, out.apparent_names);
+
+    // ---- findings, in words ----
+    auto& f = out.findings;
+    const auto& m = out.model;
+    f.push_back(fmt::format("{} fits with a residual of {:.4g} V rms (u_d {:.4g} V, u_q {:.4g} V); the noise alone is {:.3g} V on u_d "
+                            "and {:.3g} V on u_q (measured on {}).",
+                            m.spec.text(), m.rms.total, m.rms.d, m.rms.q, out.noise.sigma[0], out.noise.sigma[1], out.noise.model));
+    if (out.steps.size() > 1)
+        f.push_back(fmt::format("Before the effects (base model) the residual was {:.4g} V rms; with them it is {:.4g} V ({}).", out.steps.front().rms.total,
+                                m.rms.total, percent(m.rms.total / out.steps.front().rms.total - 1.0)));
+    const int unknowns = static_cast<int>(m.free_count());
+    if (!data.has_segments())
+        f.push_back("The data have no segment column, so the operating points are unknown: leave-one-segment-out prediction and the "
+                    "segment-mean test are not available, and identifiability is judged on the raw samples, where noise can make an effect "
+                    "look identifiable. Add a segment column (docs/data-format.md).");
+    else if (out.mean_equations <= unknowns)
+        f.push_back(fmt::format(
+            "The {} operating points give {} segment-mean equations for the {} free parameters of {}: any effect without an angle or "
+            "temperature signature is absorbed into these parameters without leaving a residual, and cannot be checked on this data.",
+            ranges.size(), out.mean_equations, unknowns, m.spec.text()));
+    for (const auto& p : out.base_problems) f.push_back("The fitted model is physically impossible: " + p + ". Something is missing or the design cannot determine it.");
+    if (out.winner) {
+        const auto& w = out.candidates.front();
+        std::string values;
+        for (Eigen::Index j = m.values.size(); j < w.fit.values.size(); ++j)
+            values += fmt::format("{}{} = {:.4g} {}", values.empty() ? "" : ", ", w.fit.names[static_cast<std::size_t>(j)], w.fit.values[j],
+                                  w.fit.units[static_cast<std::size_t>(j)]);
+        f.push_back(fmt::format("Missing effect: {} (its fit: {}). Adding it lowers the residual to {:.4g} V rms; evidence dBIC = {:.1f}{}.", w.effect,
+                                values, w.fit.rms.total, w.delta_bic,
+                                out.candidates.size() > 1 ? fmt::format(", the next best ({}) {:.1f}", out.candidates[1].effect, out.candidates[1].delta_bic)
+                                                          : std::string()));
+        if (out.after_winner && out.after_winner->significant)
+            f.push_back("After adding " + w.effect + " the residual still has structure (" + out.after_winner->signature +
+                        "): another effect is missing as well; diagnose " + spec.with(w.effect).text() + " next.");
+        if (w.identifiability == Identifiability::MostlyAbsorbed)
+            f.push_back(fmt::format("Only {:.0f} % of {}'s signature is its own on this design; the rest shifts the base parameters (Rs {}, Ld {}, Lq {}, "
+                                    "psi_f {} when it is added).",
+                                    100.0 * w.unique_fraction, w.effect, percent(w.base_shift[0]), percent(w.base_shift[1]), percent(w.base_shift[2]),
+                                    percent(w.base_shift[3])));
+    } else if (!out.tie.empty()) {
+        f.push_back(fmt::format("Near tie: {} explain the residual about equally well (dBIC within {:g}) or cannot be told apart on this "
+                                "design; the data cannot say which is missing.",
+                                join(out.tie), tie_margin));
+        f.push_back(out.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
+                                                : "An experiment that would separate them: " + experiment_list(out.tie_experiments) + ".");
+    } else if (out.not_in_library) {
+        f.push_back("The residual has structure that no library effect explains: the missing effect is not in the library. Its signature: " +
+                    out.lack_of_fit.signature + ".");
+    } else {
+        f.push_back(out.lack_of_fit.means_available || data.theta_e
+                        ? "No missing effect: the residual is at the noise floor and no library effect earns its parameters."
+                        : "No missing effect can be seen on this data.");
+    }
+    std::vector<std::string> hidden;
+    for (const auto& c : out.candidates)
+        if (c.verdict == Verdict::NotIdentifiable) hidden.push_back(c.effect);
+    if (!hidden.empty()) {
+        f.push_back(fmt::format("Not identifiable from this data (absorbed by the model's parameters without trace): {}.", join(hidden)));
+        for (const auto& c : out.candidates) {
+            if (c.verdict != Verdict::NotIdentifiable) continue;
+            std::string text = c.effect + ": ";
+            text += c.experiments.empty() ? std::string("none of the extra operating points tried, alone or together, would make a tenth of its "
+                                                        "signature its own.")
+                                          : "would show with " + experiment_list(c.experiments) + ".";
+            // The parameter that moves the base parameters most says the most about what is at stake.
+            const Absorption* largest = nullptr;
+            for (const auto& a : c.absorption)
+                if (!largest || a.base_shift.cwiseAbs().maxCoeff() > largest->base_shift.cwiseAbs().maxCoeff()) largest = &a;
+            if (largest) {
+                std::string moved;
+                for (int j = 0; j < 4; ++j)
+                    if (std::abs(largest->base_shift[j]) >= 0.005)
+                        moved += fmt::format("{}{} {}", moved.empty() ? "" : ", ", base_parameter_names[static_cast<std::size_t>(j)],
+                                             percent(largest->base_shift[j]));
+                text += fmt::format(" A typical {} = {:.4g} moves {} while the residual changes by {:.2g} noise variances", largest->parameter,
+                                    largest->typical, moved.empty() ? std::string("the base parameters by less than 0.5 %") : moved,
+                                    largest->rss_change);
+                for (const auto& [name, value] : largest->impossible_from)
+                    text += fmt::format("; at {} = {:.3g} {} would reach zero", largest->parameter, value, name);
+                text += ".";
+            }
+            f.push_back(text);
+        }
+    }
+    for (const auto& n : out.not_tried)
+        f.push_back(fmt::format("{} was not tried: it needs the column {}, which the data lack (log it to check this effect).", n.effect, n.column));
+    for (const auto& d : out.drifts)
+        if (!d.variable.empty())
+            f.push_back(fmt::format("The apparent {} drifts with {} across segments (r = {:.2f}, {:.3g} {} per {}).", d.parameter, d.variable,
+                                    d.correlation, d.slope, out.model.units[static_cast<std::size_t>(out.model.index_of(d.parameter))],
+                                    unit_of(d.variable)));
+    return out;
+}
+
+}  // namespace mhb::pmsm

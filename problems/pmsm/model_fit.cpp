@@ -1,0 +1,464 @@
+#include "problems/pmsm/model_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "framework/registry.hpp"
+#include "framework/trial.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+double wrap_into(double x, double lo, double hi) {
+    const double width = hi - lo;
+    double t = std::fmod(x - lo, width);
+    if (t < 0.0) t += width;
+    return lo + t;
+}
+
+// Where to evaluate a central difference: 1e-4 of the declared range either side, one-sided at a
+// bound. The step is that coarse because some effects are smooth only on the scale of the noise (a
+// dead-time band of a few milliamperes, where each sample enters or leaves it).
+std::pair<double, double> difference_points(double x, double lo, double hi, bool periodic) {
+    const double h = 1e-4 * (hi - lo);
+    if (periodic) return {x - h, x + h};
+    return {std::max(x - h, lo), std::min(x + h, hi)};
+}
+
+// Variable projection of a model on its data: for given effect parameters, the base parameters that
+// minimise the squared residual (the prediction is affine in them) and that residual.
+class Projection {
+public:
+    struct Workspace {
+        ModelState state;
+        Eigen::VectorXd values;    // all parameters; the base entries are the solution after project()
+        Eigen::MatrixXd phi;       // d prediction / d base parameter (2n x 4)
+        Eigen::VectorXd offset;    // prediction with the base parameters at zero
+        Eigen::VectorXd residual;  // logged minus predicted
+    };
+
+    explicit Projection(const SteadyStateModel& model) : model_(model), n_(model.data().size()) {
+        y_.resize(2 * n_);
+        y_ << model.data().u_d, model.data().u_q;
+    }
+
+    Eigen::Index samples() const { return n_; }
+    const Eigen::VectorXd& logged() const { return y_; }
+
+    Workspace workspace(const Eigen::VectorXd& values) const {
+        Workspace w;
+        w.state = model_.make_state();
+        w.values = values;
+        w.phi.resize(2 * n_, 4);
+        w.offset.resize(2 * n_);
+        w.residual.resize(2 * n_);
+        return w;
+    }
+
+    // Fills w.phi, w.offset, the base entries of w.values and w.residual; returns the residual sum of
+    // squares. Allocation-free: the optimiser calls it for every candidate.
+    double project(Workspace& w) const {
+        w.values.head<4>().setZero();
+        model_.predict(w.values.data(), w.state);
+        w.offset.head(n_) = w.state.u_d.matrix();
+        w.offset.tail(n_) = w.state.u_q.matrix();
+        for (int j = 0; j < 4; ++j) {
+            w.values.head<4>().setZero();
+            w.values[j] = 1.0;
+            model_.predict(w.values.data(), w.state);
+            w.phi.col(j).head(n_) = w.state.u_d.matrix() - w.offset.head(n_);
+            w.phi.col(j).tail(n_) = w.state.u_q.matrix() - w.offset.tail(n_);
+        }
+        w.residual = y_ - w.offset;
+        // Normal equations of the column-scaled regressor, solved by a pseudo-inverse so that a design
+        // that does not determine all four base parameters still gives the minimum-norm solution.
+        Eigen::Vector4d scale, rhs;
+        for (int a = 0; a < 4; ++a) {
+            scale[a] = w.phi.col(a).norm();
+            if (!(scale[a] > 0.0)) scale[a] = 1.0;
+        }
+        Eigen::Matrix4d gram;
+        for (int a = 0; a < 4; ++a) {
+            rhs[a] = w.phi.col(a).dot(w.residual) / scale[a];
+            for (int b = a; b < 4; ++b) gram(a, b) = gram(b, a) = w.phi.col(a).dot(w.phi.col(b)) / (scale[a] * scale[b]);
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(gram);
+        const double largest = eig.eigenvalues().maxCoeff();
+        Eigen::Vector4d inverse;
+        for (int a = 0; a < 4; ++a) inverse[a] = eig.eigenvalues()[a] > 1e-13 * largest ? 1.0 / eig.eigenvalues()[a] : 0.0;
+        const Eigen::Vector4d base =
+            (eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose() * rhs).cwiseQuotient(scale);
+        w.residual.noalias() -= w.phi * base;
+        w.values.head<4>() = base;
+        return w.residual.squaredNorm();
+    }
+
+private:
+    const SteadyStateModel& model_;
+    Eigen::Index n_;
+    Eigen::VectorXd y_;
+};
+
+// The optimiser's view: the projected mean squared error as a function of the searched effect
+// parameters, inside their declared plausible box.
+class EffectSearch final : public Problem {
+public:
+    EffectSearch(const Projection& projection, const SteadyStateModel& model, Eigen::VectorXd start,
+                 std::vector<Eigen::Index> searched)
+        : projection_(projection), start_(std::move(start)), searched_(std::move(searched)) {
+        const auto k = static_cast<Eigen::Index>(searched_.size());
+        Vector lower(k), upper(k);
+        std::vector<std::string> names;
+        for (Eigen::Index j = 0; j < k; ++j) {
+            const auto p = searched_[static_cast<std::size_t>(j)];
+            lower[j] = model.bounds().lower[p];
+            upper[j] = model.bounds().upper[p];
+            names.push_back(model.parameter_names()[static_cast<std::size_t>(p)]);
+        }
+        set_domain(lower, upper, names);
+    }
+
+    void evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) const override {
+        auto w = projection_.workspace(start_);  // once per population
+        for (Eigen::Index c = 0; c < x.cols(); ++c) {
+            w.values = start_;
+            for (std::size_t j = 0; j < searched_.size(); ++j) w.values[searched_[j]] = x(static_cast<Eigen::Index>(j), c);
+            f[c] = projection_.project(w) / static_cast<double>(projection_.samples());
+        }
+    }
+
+private:
+    const Projection& projection_;
+    Eigen::VectorXd start_;
+    std::vector<Eigen::Index> searched_;
+};
+
+struct ParameterInfo {
+    std::vector<std::string> units;
+    std::vector<bool> periodic;
+};
+
+ParameterInfo parameter_info(const SteadyStateModel& model) {
+    ParameterInfo info;
+    info.units = {"Ω", "H", "H", "Wb"};
+    info.periodic.assign(4, false);
+    for (const auto& e : model.effects())
+        for (const auto& s : e->parameter_specs()) {
+            if (s.type != ParameterType::Real) continue;
+            info.units.push_back(s.unit);
+            info.periodic.push_back(is_periodic(s));
+        }
+    return info;
+}
+
+// Levenberg-Marquardt on the projected residual over the `moving` effect parameters, each kept in its
+// range (angles of a full turn wrap). Returns the iterations used.
+int polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
+           const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
+    double rss = projection.project(w);
+    const auto m = static_cast<Eigen::Index>(moving.size());
+    if (m == 0) return 0;
+    const auto& lo = model.bounds().lower;
+    const auto& hi = model.bounds().upper;
+    auto place = [&](Eigen::VectorXd& v, Eigen::Index p, double x) {
+        v[p] = periodic[static_cast<std::size_t>(p)] ? wrap_into(x, lo[p], hi[p]) : std::clamp(x, lo[p], hi[p]);
+    };
+    const Eigen::Index rows = w.residual.size();
+    Eigen::MatrixXd jacobian(rows, m);
+    Eigen::VectorXd residual(rows), values(w.values.size());
+    double lambda = 1e-3;
+    int iteration = 0;
+    for (; iteration < 100; ++iteration) {
+        residual = w.residual;
+        values = w.values;
+        for (Eigen::Index j = 0; j < m; ++j) {
+            const Eigen::Index p = moving[static_cast<std::size_t>(j)];
+            const auto [down, up] = difference_points(values[p], lo[p], hi[p], periodic[static_cast<std::size_t>(p)]);
+            w.values = values;
+            w.values[p] = up;
+            projection.project(w);
+            jacobian.col(j) = w.residual;
+            w.values[p] = down;
+            projection.project(w);
+            jacobian.col(j) = (jacobian.col(j) - w.residual) / (up - down);
+        }
+        const Eigen::VectorXd gradient = jacobian.transpose() * residual;
+        const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+        // Parameters at a bound that the gradient pushes outward are held this iteration.
+        std::vector<Eigen::Index> step_on;
+        for (Eigen::Index j = 0; j < m; ++j) {
+            const Eigen::Index p = moving[static_cast<std::size_t>(j)];
+            const bool held = !periodic[static_cast<std::size_t>(p)] &&
+                              ((values[p] <= lo[p] && gradient[j] > 0.0) || (values[p] >= hi[p] && gradient[j] < 0.0));
+            if (!held) step_on.push_back(j);
+        }
+        bool improved = false;
+        double new_rss = rss;
+        if (!step_on.empty()) {
+            const auto f = static_cast<Eigen::Index>(step_on.size());
+            Eigen::MatrixXd a(f, f);
+            Eigen::VectorXd g(f);
+            for (Eigen::Index r = 0; r < f; ++r) {
+                g[r] = gradient[step_on[static_cast<std::size_t>(r)]];
+                for (Eigen::Index c = 0; c < f; ++c) a(r, c) = normal(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
+            }
+            const Eigen::VectorXd diagonal = a.diagonal().cwiseMax(1e-15 * a.diagonal().maxCoeff() + 1e-300);
+            for (int attempt = 0; attempt < 12 && !improved; ++attempt) {
+                Eigen::MatrixXd damped = a;
+                damped.diagonal() += lambda * diagonal;
+                const Eigen::VectorXd delta = damped.ldlt().solve(-g);
+                w.values = values;
+                for (Eigen::Index r = 0; r < f; ++r) {
+                    const Eigen::Index p = moving[static_cast<std::size_t>(step_on[static_cast<std::size_t>(r)])];
+                    place(w.values, p, values[p] + delta[r]);
+                }
+                new_rss = delta.allFinite() ? projection.project(w) : std::numeric_limits<double>::infinity();
+                if (new_rss < rss) {
+                    improved = true;
+                    lambda = std::max(lambda / 3.0, 1e-12);
+                } else {
+                    lambda *= 4.0;
+                }
+            }
+        }
+        if (!improved) {
+            w.values = values;
+            projection.project(w);
+            break;
+        }
+        const double gain = (rss - new_rss) / std::max(rss, 1e-300);
+        rss = new_rss;
+        if (gain < 1e-12) {
+            ++iteration;
+            break;
+        }
+    }
+    return iteration;
+}
+
+ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& values,
+                  CovarianceMethod covariance) {
+    ModelFit fit;
+    fit.spec = spec;
+    fit.names = model.parameter_names();
+    const auto info = parameter_info(model);
+    fit.units = info.units;
+    fit.periodic = info.periodic;
+    fit.free = free_parameters(spec);
+    fit.values = values;
+    fit.range_lower = model.bounds().lower;
+    fit.range_upper = model.bounds().upper;
+    const Eigen::Index n = model.data().size(), p = model.parameter_count();
+    fit.samples = n;
+    Eigen::VectorXd y(2 * n);
+    y << model.data().u_d, model.data().u_q;
+    fit.residual = y - predict_stacked(model, values);
+    fit.rms = axis_rms(fit.residual, n);
+    fit.segments = segment_residuals(model.data(), fit.residual);
+
+    std::vector<Eigen::Index> columns;
+    for (Eigen::Index j = 0; j < p; ++j)
+        if (fit.free[static_cast<std::size_t>(j)]) columns.push_back(j);
+    const Eigen::MatrixXd jacobian = prediction_jacobian(model, values, columns);
+    // A parameter that moves the prediction by less than a nanovolt over its whole range (the phase
+    // of a harmonic whose amplitude is zero) is not determined at all; it is left out of the
+    // covariance, which would otherwise be singular for every parameter.
+    std::vector<Eigen::Index> kept;
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        const Eigen::Index j = columns[c];
+        const double width = fit.range_upper[j] - fit.range_lower[j];
+        if (j < 4 || jacobian.col(static_cast<Eigen::Index>(c)).norm() * width > 1e-9 * std::sqrt(2.0 * static_cast<double>(n)))
+            kept.push_back(static_cast<Eigen::Index>(c));
+    }
+    fit.lower = fit.upper = values;
+    fit.standard_error = Eigen::VectorXd::Zero(p);
+    for (const auto j : columns) fit.lower[j] = fit.upper[j] = fit.standard_error[j] = nan;
+    if (static_cast<Eigen::Index>(kept.size()) < 2 * n && !kept.empty()) {
+        Eigen::MatrixXd phi(2 * n, static_cast<Eigen::Index>(kept.size()));
+        Eigen::VectorXd estimate(phi.cols());
+        for (Eigen::Index c = 0; c < phi.cols(); ++c) {
+            phi.col(c) = jacobian.col(kept[static_cast<std::size_t>(c)]);
+            estimate[c] = values[columns[static_cast<std::size_t>(kept[static_cast<std::size_t>(c)])]];
+        }
+        RowLayout layout;
+        layout.samples = n;
+        layout.axes = 2;
+        if (model.data().has_segments()) layout.block = model.data().segment;
+        // The linearised model around the estimate: its residual is the model's own.
+        fit.uncertainty = parameter_uncertainty(phi, phi * estimate + fit.residual, estimate, layout, covariance);
+        for (Eigen::Index c = 0; c < phi.cols(); ++c) {
+            const Eigen::Index j = columns[static_cast<std::size_t>(kept[static_cast<std::size_t>(c)])];
+            if (!std::isfinite(fit.uncertainty.standard_error[c])) continue;
+            fit.standard_error[j] = fit.uncertainty.standard_error[c];
+            fit.lower[j] = fit.uncertainty.lower[c];
+            fit.upper[j] = fit.uncertainty.upper[c];
+        }
+    }
+    return fit;
+}
+
+std::vector<Eigen::Index> free_effect_parameters(const std::vector<bool>& free) {
+    std::vector<Eigen::Index> out;
+    for (std::size_t j = 4; j < free.size(); ++j)
+        if (free[j]) out.push_back(static_cast<Eigen::Index>(j));
+    return out;
+}
+
+ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Projection& projection,
+                Projection::Workspace& w, const std::vector<bool>& free, CovarianceMethod covariance,
+                std::int64_t evaluations, std::string method) {
+    const auto info = parameter_info(model);
+    const int iterations = polish(projection, model, w, free_effect_parameters(free), info.periodic);
+    // The base parameters once more by column-pivoting QR, for the reported values.
+    projection.project(w);
+    const LeastSquares exact = solve_least_squares(w.phi, projection.logged() - w.offset);
+    w.values.head<4>() = exact.solution;
+    ModelFit fit = assemble(model, spec, w.values, covariance);
+    fit.evaluations = evaluations;
+    fit.polish_iterations = iterations;
+    fit.method = std::move(method);
+    if (iterations > 0) fit.method += fmt::format(", then {} Levenberg-Marquardt iterations", iterations);
+    return fit;
+}
+
+}  // namespace
+
+Eigen::Index ModelFit::free_count() const {
+    return static_cast<Eigen::Index>(std::count(free.begin(), free.end(), true));
+}
+
+Eigen::Index ModelFit::index_of(const std::string& name) const {
+    for (std::size_t j = 0; j < names.size(); ++j)
+        if (names[j] == name) return static_cast<Eigen::Index>(j);
+    return -1;
+}
+
+bool ModelFit::at_bound(Eigen::Index j) const {
+    if (j < 4 || !free[static_cast<std::size_t>(j)] || periodic[static_cast<std::size_t>(j)]) return false;
+    const double slack = 1e-9 * (range_upper[j] - range_lower[j]);
+    return values[j] <= range_lower[j] + slack || values[j] >= range_upper[j] - slack;
+}
+
+Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::VectorXd& values) {
+    ModelState s = model.make_state();
+    model.predict(values.data(), s);
+    Eigen::VectorXd out(2 * model.data().size());
+    out << s.u_d.matrix(), s.u_q.matrix();
+    return out;
+}
+
+Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values,
+                                    const std::vector<Eigen::Index>& columns) {
+    const Eigen::Index n = model.data().size();
+    Eigen::MatrixXd jacobian(2 * n, static_cast<Eigen::Index>(columns.size()));
+    Eigen::VectorXd at = values;
+    at.head<4>().setZero();
+    const Eigen::VectorXd offset = predict_stacked(model, at);
+    const auto& lo = model.bounds().lower;
+    const auto& hi = model.bounds().upper;
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        const Eigen::Index j = columns[c];
+        if (j < 4) {
+            at = values;
+            at.head<4>().setZero();
+            at[j] = 1.0;
+            jacobian.col(static_cast<Eigen::Index>(c)) = predict_stacked(model, at) - offset;
+            continue;
+        }
+        const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
+        Eigen::VectorXd plus = values, minus = values;
+        plus[j] = up;
+        minus[j] = down;
+        jacobian.col(static_cast<Eigen::Index>(c)) = (predict_stacked(model, plus) - predict_stacked(model, minus)) / (up - down);
+    }
+    return jacobian;
+}
+
+AxisRms axis_rms(const Eigen::VectorXd& residual, Eigen::Index samples) {
+    AxisRms r;
+    if (samples == 0) return r;
+    const double n = static_cast<double>(samples);
+    r.d = std::sqrt(residual.head(samples).squaredNorm() / n);
+    r.q = std::sqrt(residual.segment(samples, samples).squaredNorm() / n);
+    r.total = std::sqrt((r.d * r.d + r.q * r.q) / 2.0);
+    return r;
+}
+
+std::vector<SegmentResidual> segment_residuals(const Measurement& data, const Eigen::VectorXd& residual) {
+    const Eigen::Index n = data.size();
+    std::vector<SegmentResidual> out;
+    Eigen::Index begin = 0;
+    for (Eigen::Index k = 1; k <= n; ++k) {
+        if (k < n && (!data.has_segments() || data.segment[k] == data.segment[k - 1])) continue;
+        SegmentResidual s;
+        s.label = data.has_segments() ? data.segment_labels[static_cast<std::size_t>(data.segment[begin])] : "all";
+        s.first = begin;
+        s.rows = k - begin;
+        const auto d = residual.segment(begin, s.rows), q = residual.segment(n + begin, s.rows);
+        const double rows = static_cast<double>(s.rows);
+        s.rms.d = std::sqrt(d.squaredNorm() / rows);
+        s.rms.q = std::sqrt(q.squaredNorm() / rows);
+        s.rms.total = std::sqrt((s.rms.d * s.rms.d + s.rms.q * s.rms.q) / 2.0);
+        s.mean = {d.mean(), q.mean()};
+        out.push_back(s);
+        begin = k;
+    }
+    return out;
+}
+
+ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOptions& options, const Eigen::VectorXd* start,
+                   const std::vector<Eigen::Index>& search) {
+    const auto model = make_model(spec, data);
+    const auto free = free_parameters(spec);
+    const Eigen::VectorXd initial = start ? *start : model->parameters_of(MotorParameters{});
+    std::vector<Eigen::Index> searched = search;
+    if (searched.empty() && !start) searched = free_effect_parameters(free);
+    const Projection projection(*model);
+    auto w = projection.workspace(initial);
+    if (searched.empty())
+        return finish(*model, spec, projection, w, free, options.covariance, 0,
+                      spec.effects.empty() || free_effect_parameters(free).empty() ? "linear least squares (exact)"
+                                                                                   : "local refinement from the given start");
+
+    const EffectSearch problem(projection, *model, initial, searched);
+    auto optimizer = make_optimizer(options.optimizer);
+    const auto k = static_cast<std::int64_t>(searched.size());
+    const std::int64_t budget = options.evaluations > 0 ? options.evaluations : 150 + 50 * k;
+    const TrialRecord record = run_trial(*optimizer, problem, TrialSetup{Budget{0, budget}, options.seed, false});
+    // The optimiser's best, or the start when that is better (the start is a declared typical value).
+    const double start_rss = projection.project(w);
+    std::string method = fmt::format("{} over {} effect parameter{} ({} evaluations)", options.optimizer, k, k == 1 ? "" : "s",
+                                     record.evaluations);
+    if (!record.ok) method += " [the optimiser failed: " + record.error + "]";
+    if (record.best_position.size() == k && record.best_fitness * static_cast<double>(projection.samples()) < start_rss) {
+        w.values = initial;
+        for (std::size_t j = 0; j < searched.size(); ++j) w.values[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
+    } else {
+        w.values = initial;
+    }
+    return finish(*model, spec, projection, w, free, options.covariance, record.evaluations, method);
+}
+
+Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& start) {
+    const Projection projection(model);
+    auto w = projection.workspace(start);
+    polish(projection, model, w, free_effect_parameters(free_parameters(spec)), parameter_info(model).periodic);
+    projection.project(w);
+    return w.values;
+}
+
+ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start, CovarianceMethod covariance) {
+    const auto model = make_model(spec, data);
+    const Projection projection(*model);
+    auto w = projection.workspace(start);
+    return finish(*model, spec, projection, w, free_parameters(spec), covariance, 0, "local refinement from the given start");
+}
+
+}  // namespace mhb::pmsm

@@ -1,0 +1,118 @@
+// The parts of a diagnosis beyond ranking: ties stated instead of decided, implausible fits, effects
+// the data cannot carry, and `mhbench diagnose` with its JSON contract and its report.
+#include <catch2/catch.hpp>
+
+#include <regex>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/pmsm_diagnosis_fixture.hpp"
+#include "tests/temporary_directory.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+using namespace mhb::pmsm::testing;
+
+namespace {
+
+const Candidate* candidate(const Diagnosis& d, const std::string& effect) {
+    for (const auto& c : d.candidates)
+        if (c.effect == effect) return &c;
+    return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("at one speed in one direction an encoder offset and a voltage offset are a tie, with the experiment that separates them",
+          "[pmsm][diagnosis]") {
+    // Both leave a constant on u_d when the speed does not change: omega psi_f delta, or u_d0.
+    auto spec = read_simulation_profile(profile_path("diagnosis_profile.toml"));
+    spec.segments = {{"a", 10.0, 0.05, 0.0, 0.8, 150},  {"b", 10.0, 0.10, -0.15, 0.3, 150}, {"c", 10.0, 0.15, -0.3, 0.3, 150},
+                     {"d", 10.0, 0.10, 0.0, 0.3, 150},  {"e", 10.0, 0.05, -0.3, 0.3, 150},  {"f", 10.0, 0.15, -0.15, 0.3, 150}};
+    spec.logging.temperatures = false;
+    spec.effects.push_back(make_effect("encoder_offset", {{"offset", 0.05}}));
+    const auto data = simulate(spec).data;
+    const auto d = diagnose(data, parse_model_spec("base"), DiagnosisOptions{});
+    CHECK(d.missing_effect_found);
+    CHECK_FALSE(d.winner);
+    REQUIRE(d.tie.size() >= 2);
+    CHECK(std::find(d.tie.begin(), d.tie.end(), "encoder_offset") != d.tie.end());
+    CHECK(std::find(d.tie.begin(), d.tie.end(), "voltage_offset") != d.tie.end());
+    std::vector<std::string> experiments;
+    for (const auto& e : d.tie_experiments) experiments.push_back(e.name);
+    CHECK(std::find(experiments.begin(), experiments.end(), "the other direction") != experiments.end());
+    CHECK(std::find(experiments.begin(), experiments.end(), "another speed") != experiments.end());
+    // Another d-axis current does not separate two constants on u_d.
+    CHECK(std::find(experiments.begin(), experiments.end(), "another d-axis current") == experiments.end());
+    // Effects needing temperatures were not tried, and the diagnosis says which column is missing.
+    REQUIRE(d.not_tried.size() == 2);
+    for (const auto& n : d.not_tried) CHECK(n.column == (n.effect == "rs_thermal" ? "temp_winding" : "temp_magnet"));
+}
+
+TEST_CASE("a candidate whose fit needs an impossible value is called implausible and ranked below", "[pmsm][diagnosis]") {
+    // The clean diagnosis data log temperatures that the plant ignores: rs_thermal can only fit with
+    // alpha at the lower end of its copper range, and is worse than no effect at all.
+    const auto d = diagnose(diagnosis_data({}), parse_model_spec("base"), DiagnosisOptions{});
+    const auto* rs = candidate(d, "rs_thermal");
+    REQUIRE(rs);
+    CHECK(rs->verdict == Verdict::Implausible);
+    CHECK_FALSE(rs->plausible);
+    REQUIRE_FALSE(rs->implausible.empty());
+    CHECK(rs->implausible.front().find("rs_thermal.alpha") != std::string::npos);
+    CHECK(rs->delta_bic > 0.0);
+    CHECK(&d.candidates.back() >= rs);
+    for (const auto& c : d.candidates)
+        if (c.verdict == Verdict::NotSupported) CHECK(&c < rs);
+}
+
+TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, before and after", "[pmsm][diagnosis][cli]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "hidden.csv";
+    write_measurement(csv, diagnosis_data({{"encoder_offset", {}}}));
+    const auto json_path = dir.path() / "diagnosis.json";
+    const auto report = dir.path() / "report";
+    auto run = run_mhbench("diagnose --data " + csv.string() + " --model base --json " + json_path.string() + " --report " + report.string(),
+                           dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    CHECK(run.output.find("Missing effect: encoder_offset") != std::string::npos);
+    const auto j = nlohmann::json::parse(mhb::testing::read_file(json_path));
+    CHECK(j["model"] == "base");
+    CHECK(j["missing_effect_found"] == true);
+    CHECK(j["winner"] == "encoder_offset");
+    for (const char* name : {"Rs", "Ld", "Lq", "psi_f"}) CHECK(j["parameters"][name]["ci95"].size() == 2);
+    REQUIRE(j["candidates"].size() == 9);
+    const auto& first = j["candidates"][0];
+    CHECK(first["effect"] == "encoder_offset");
+    CHECK(first["plausible"] == true);
+    CHECK(first["rms_after"]["total"].get<double>() < j["rms"]["total"].get<double>());
+    CHECK(first["parameters"]["encoder_offset.offset"]["ci95"].size() == 2);
+    CHECK(first["parameters"]["Rs"]["value"].get<double>() > 0.0);
+    for (std::size_t k = 1; k < j["candidates"].size(); ++k) CHECK(j["candidates"][k]["rms_after"]["total"].is_number());
+
+    // The report: every image it shows exists, and it names the missing effect.
+    const std::string md = mhb::testing::read_file(report / "report.md");
+    CHECK(md.find("Missing effect: encoder_offset") != std::string::npos);
+    CHECK(md.find("mhbench fit --data " + csv.string() + " --model base+encoder_offset") != std::string::npos);
+    int images = 0;
+    const std::regex image(R"(!\[[^\]]*\]\(([^)]+)\))");
+    for (auto it = std::sregex_iterator(md.begin(), md.end(), image); it != std::sregex_iterator(); ++it, ++images)
+        CHECK(std::filesystem::exists(report / (*it)[1].str()));
+    for (const char* png : {"residual_time.png", "residual_angle.png", "residual_speed.png", "residual_current.png", "residual_temperature.png",
+                            "segment_rms.png", "apparent_parameters.png", "candidates.png"})
+        CHECK(md.find(png) != std::string::npos);
+    CHECK(images == 8);
+
+    // The next round shows the error before and after.
+    run = run_mhbench("diagnose --data " + csv.string() + " --model base+encoder_offset --report " + report.string(), dir.path() / "log");
+    REQUIRE(run.exit_code == 0);
+    CHECK(run.output.find("No missing effect") != std::string::npos);
+    const std::string after = mhb::testing::read_file(report / "report.md");
+    CHECK(after.find("Error before and after the effects") != std::string::npos);
+    CHECK(after.find("| `base` |") != std::string::npos);
+    CHECK(after.find("| `base+encoder_offset` |") != std::string::npos);
+
+    run = run_mhbench("diagnose --data " + csv.string() + " --model 'base+rs_thermal(alpha=0.01)'", dir.path() / "log");
+    CHECK(run.exit_code == 2);
+    CHECK(run.output.find("error: --model: rs_thermal.alpha: 0.01 is outside the plausible range [0.0035, 0.0045] 1/K") != std::string::npos);
+}
