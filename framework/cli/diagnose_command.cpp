@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "framework/cli/commands.hpp"
+#include "framework/cli/model_command_options.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/diagnosis_report.hpp"
@@ -15,23 +16,15 @@
 namespace mhb::cli {
 namespace {
 
-struct DiagnoseCommandOptions {
-    std::string data, model = "base", json, report, optimizer = "cmaes";
-    double settle = 0.0;
-    std::int64_t evaluations = 0;
-    std::uint64_t seed = 1;
+struct DiagnoseCommandOptions : ModelCommandOptions {
+    std::string report;
 };
 
 const bool registered = register_command("diagnose", [](CLI::App& app) {
     auto* cmd = app.add_subcommand("diagnose", "Diagnose a PMSM model against measurements: where it fails, which effect is missing, how sure");
     auto o = std::make_shared<DiagnoseCommandOptions>();
-    cmd->add_option("--data", o->data, "measurement CSV (docs/data-format.md)")->required();
-    cmd->add_option("--model", o->model, "model to diagnose, e.g. base or base+deadtime (docs/effects.md)");
-    cmd->add_option("--optimizer", o->optimizer, "optimizer searching the nonlinear effect parameters");
-    cmd->add_option("--evaluations", o->evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)");
-    cmd->add_option("--seed", o->seed, "optimizer seed");
-    cmd->add_option("--settle", o->settle, "drop this many seconds after each segment start (needs t, segment)");
-    cmd->add_option("--json", o->json, "write the diagnosis as JSON here");
+    add_model_options(cmd, *o, "model to diagnose, e.g. base or base+deadtime (docs/effects.md)",
+                      "write the diagnosis as JSON here");
     cmd->add_option("--report", o->report, "write report.md with PNG plots into this directory");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);

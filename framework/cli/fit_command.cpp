@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "framework/cli/commands.hpp"
+#include "framework/cli/model_command_options.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/diagnosis_report.hpp"
@@ -15,23 +16,10 @@
 namespace mhb::cli {
 namespace {
 
-struct FitCommandOptions {
-    std::string data, model = "base", json, optimizer = "cmaes";
-    double settle = 0.0;
-    std::int64_t evaluations = 0;
-    std::uint64_t seed = 1;
-};
-
 const bool registered = register_command("fit", [](CLI::App& app) {
     auto* cmd = app.add_subcommand("fit", "Fit a PMSM model (base + effects) to measurements: parameters, 95 % intervals, residuals");
-    auto o = std::make_shared<FitCommandOptions>();
-    cmd->add_option("--data", o->data, "measurement CSV (docs/data-format.md)")->required();
-    cmd->add_option("--model", o->model, "model, e.g. base+deadtime+delay(tau=150e-6) (docs/effects.md)");
-    cmd->add_option("--optimizer", o->optimizer, "optimizer searching the nonlinear effect parameters");
-    cmd->add_option("--evaluations", o->evaluations, "optimizer evaluations (0: 150 + 50 per searched parameter)");
-    cmd->add_option("--seed", o->seed, "optimizer seed");
-    cmd->add_option("--settle", o->settle, "drop this many seconds after each segment start (needs t, segment)");
-    cmd->add_option("--json", o->json, "write the fit as JSON here");
+    auto o = std::make_shared<ModelCommandOptions>();
+    add_model_options(cmd, *o, "model, e.g. base+deadtime+delay(tau=150e-6) (docs/effects.md)", "write the fit as JSON here");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         OptimizerRegistry::instance().at(o->optimizer, "optimizer");

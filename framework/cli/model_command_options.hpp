@@ -1,0 +1,28 @@
+#pragma once
+// Options shared by the commands that fit a PMSM model to measurements (`fit`, `diagnose`).
+#include <cstdint>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace mhb::cli {
+
+struct ModelCommandOptions {
+    std::string data, model = "base", json, optimizer = "cmaes";
+    double settle = 0.0;
+    std::int64_t evaluations = 0;
+    std::uint64_t seed = 1;
+};
+
+inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::string& model_help,
+                              const std::string& json_help) {
+    cmd->add_option("--data", o.data, "measurement CSV (docs/data-format.md)")->required();
+    cmd->add_option("--model", o.model, model_help);
+    cmd->add_option("--optimizer", o.optimizer, "optimizer searching the nonlinear effect parameters");
+    cmd->add_option("--evaluations", o.evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)");
+    cmd->add_option("--seed", o.seed, "optimizer seed");
+    cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)");
+    cmd->add_option("--json", o.json, json_help);
+}
+
+}  // namespace mhb::cli
