@@ -21,6 +21,7 @@ public:
     PmsmIdentification(const ParameterSet& p, const ProblemContext& context) {
         const std::string& data = p.text("data");
         if (data.empty()) throw ParameterError("data", "required: the measurement CSV to fit (docs/data-format.md)");
+        shown_path_ = data;
         path_ = std::filesystem::path(data).is_absolute() ? std::filesystem::path(data) : context.base_directory / data;
         const Measurement all = read_measurement(path_);
         const auto rows = settled_rows(all, p.real("settle"));
@@ -52,7 +53,7 @@ public:
 
     std::string describe() const override {
         const auto& u = fit_.uncertainty;
-        std::string text = fmt::format("data {}: {} of {} samples", path_.string(), data_.size(), total_samples_);
+        std::string text = fmt::format("data {}: {} of {} samples", shown_path_, data_.size(), total_samples_);
         if (data_.has_segments()) text += fmt::format(" in {} segments", data_.segment_labels.size());
         text += fmt::format("; fitness {}; residual d {:.3g} V, q {:.3g} V (lag-1 correlation {:.2f}, {:.2f}); "
                             "least-squares optimum, 95 % {}:",
@@ -86,6 +87,7 @@ private:
     }
 
     std::filesystem::path path_;
+    std::string shown_path_;  // as the config wrote it, so tables do not depend on where the checkout lives
     Measurement data_;
     Eigen::Index total_samples_ = 0;
     BaseModelFit fit_;
