@@ -72,7 +72,13 @@ public:
             if (!table) fail(line_of(element), where, "must be a table");
             const long line = line_of(element);
             const std::string name = text(*table, "name", where + ".name", line, true);
-            const auto& entry = registry.at(name, kind);  // UnknownPlugin is rethrown below with the line
+            const typename RegistryT::Entry* found = nullptr;
+            try {
+                found = &registry.at(name, kind);
+            } catch (const UnknownPlugin& e) {  // its message lists the registered names
+                fail(line_of(*table->get("name")), where + ".name", e.what());
+            }
+            const auto& entry = *found;
             const std::string label = text(*table, "label", where + ".label", line, false);
 
             std::vector<std::pair<std::string, std::vector<ParameterValue>>> axes;
@@ -212,28 +218,8 @@ ExperimentSpec load_experiment(const fs::path& file) {
     if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0)
         reader.fail(line_of(*budget), "budget", "set iterations, evaluations or both");
 
-    try {
-        spec.optimizers = reader.variants(root, "optimizer", "optimizer", OptimizerRegistry::instance());
-        spec.problems = reader.variants(root, "problem", "problem", ProblemRegistry::instance());
-    } catch (const UnknownPlugin& e) {
-        // Find the entry that named it, for the line number.
-        for (const char* key : {"optimizer", "problem"}) {
-            if (const auto* arr = root.get(key) ? root.get(key)->as_array() : nullptr) {
-                std::size_t i = 0;
-                for (const auto& el : *arr) {
-                    const auto* t = el.as_table();
-                    const auto* n = t ? t->get("name") : nullptr;
-                    const auto* s = n ? n->as_string() : nullptr;
-                    const bool known_name = s && (std::string(key) == "optimizer"
-                                                      ? OptimizerRegistry::instance().find(s->get()) != nullptr
-                                                      : ProblemRegistry::instance().find(s->get()) != nullptr);
-                    if (s && !known_name) reader.fail(line_of(*n), fmt::format("{}[{}].name", key, i), e.what());
-                    ++i;
-                }
-            }
-        }
-        reader.fail(0, "", e.what());
-    }
+    spec.optimizers = reader.variants(root, "optimizer", "optimizer", OptimizerRegistry::instance());
+    spec.problems = reader.variants(root, "problem", "problem", ProblemRegistry::instance());
 
     spec.baseline = spec.optimizers.front().label;
     spec.references.clear();
