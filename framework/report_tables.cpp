@@ -347,13 +347,16 @@ std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>
     return out;
 }
 
-void write_tables(const std::filesystem::path& directory, const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
-    for (const auto& [name, text] : {std::pair{"table.md", markdown_report(info, records)},
+std::string write_tables(const std::filesystem::path& directory, const ExperimentInfo& info,
+                         const std::vector<TrialRecord>& records) {
+    std::string markdown = markdown_report(info, records);
+    for (const auto& [name, text] : {std::pair{"table.md", markdown},
                                      std::pair{"table.csv", csv_table(info, records)}}) {
         std::ofstream out(directory / name);
         out << text;
         if (!out) throw InputError((directory / name).string(), 0, "output", "cannot write the table");
     }
+    return markdown;
 }
 
 }  // namespace mhb

@@ -22,8 +22,8 @@ double final_error(const ProblemInfo& problem, const TrialRecord& record);
 std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 
-// Writes table.md and table.csv into `directory`.
-void write_tables(const std::filesystem::path& directory, const ExperimentInfo& info,
+// Writes table.md and table.csv into `directory`; returns the Markdown.
+std::string write_tables(const std::filesystem::path& directory, const ExperimentInfo& info,
                   const std::vector<TrialRecord>& records);
 
 }  // namespace mhb

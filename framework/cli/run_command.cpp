@@ -20,14 +20,13 @@ std::string publish(const fs::path& directory, bool plots, bool quiet) {
     const auto info = read_experiment_info(directory);
     auto loaded = read_results(directory / "results.jsonl");
     for (const auto& note : loaded.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
-    write_tables(directory, info, loaded.records);
+    const std::string report = write_tables(directory, info, loaded.records);
     std::vector<fs::path> images;
     if (plots && info.plots) {
         const auto outcome = write_plots(directory, info, loaded.records);
         for (const auto& note : outcome.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
         images = outcome.images;
     }
-    const std::string report = markdown_report(info, loaded.records);
     if (!quiet) {
         fmt::print("{}\n", report);
         fmt::print("Wrote {}/table.md, table.csv", directory.string());
