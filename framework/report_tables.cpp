@@ -20,13 +20,6 @@ std::string num(double v) {
 }
 std::string pval(double p) { return std::isnan(p) ? "–" : fmt::format("{:.3g}", p); }
 
-std::vector<double> errors_of(const ProblemInfo& problem, const std::vector<const TrialRecord*>& trials) {
-    std::vector<double> out;
-    out.reserve(trials.size());
-    for (const auto* t : trials) out.push_back(final_error(problem, *t));
-    return out;
-}
-
 std::size_t index_of(const ExperimentInfo& info, const std::string& label) {
     for (std::size_t i = 0; i < info.optimizers.size(); ++i)
         if (info.optimizers[i].label == label) return i;
@@ -39,29 +32,65 @@ const std::optional<Vector>& accuracy_target(const ProblemInfo& p) {
     return p.truth.true_parameters ? p.truth.true_parameters : p.truth.reference_solution;
 }
 
-struct ParameterStats {
-    std::vector<stats::Summary> per_parameter;
-};
-ParameterStats parameter_stats(const std::vector<const TrialRecord*>& trials, int dimension) {
-    ParameterStats s;
-    for (int j = 0; j < dimension; ++j) {
-        std::vector<double> v;
-        for (const auto* t : trials)
-            if (t->best_position.size() == dimension) v.push_back(t->best_position[j]);
-        s.per_parameter.push_back(stats::summarize(v));
-    }
-    return s;
+double error_percent(double value, const std::optional<Vector>& target, Eigen::Index j) {
+    return target ? 100.0 * std::abs(value - (*target)[j]) / std::abs((*target)[j]) : std::nan("");
 }
 
-double seconds_sum(const std::vector<const TrialRecord*>& trials) {
-    double s = 0;
-    for (const auto* t : trials) s += t->seconds;
-    return s;
-}
-double evaluations_mean(const std::vector<const TrialRecord*>& trials) {
-    double s = 0;
-    for (const auto* t : trials) s += static_cast<double>(t->evaluations);
-    return trials.empty() ? std::nan("") : s / static_cast<double>(trials.size());
+// Pairwise test of one group against a reference group.
+struct Versus {
+    double p = std::nan(""), a12 = std::nan("");
+};
+
+// Everything the tables say about one (problem, optimizer) group, computed once for both formats.
+struct GroupSummary {
+    std::size_t runs = 0, failed = 0;
+    stats::Summary error;    // final f - f* (f when the optimum is unknown)
+    stats::Summary fitness;  // final f
+    double mean_evaluations = std::nan(""), total_seconds = 0;
+    std::vector<std::optional<Versus>> versus;  // one per info.references; empty when not applicable
+    std::vector<stats::Summary> parameters;     // for problems with named parameters
+    double mean_seconds() const { return runs ? total_seconds / static_cast<double>(runs) : std::nan(""); }
+};
+
+// summaries[p][o], in the experiment's declaration order.
+std::vector<std::vector<GroupSummary>> summarize_groups(const ExperimentInfo& info, const TrialGroups& groups) {
+    std::vector<std::vector<GroupSummary>> out(info.problems.size(), std::vector<GroupSummary>(info.optimizers.size()));
+    for (std::size_t p = 0; p < info.problems.size(); ++p) {
+        const auto& prob = info.problems[p];
+        std::vector<std::vector<double>> errors(info.optimizers.size());
+        for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
+            const auto& trials = groups.ok[p][o];
+            auto& g = out[p][o];
+            g.runs = trials.size();
+            g.failed = groups.failed[p][o];
+            std::vector<double> fitness;
+            double evaluations = 0;
+            for (const auto* t : trials) {
+                errors[o].push_back(final_error(prob, *t));
+                fitness.push_back(t->best_fitness);
+                evaluations += static_cast<double>(t->evaluations);
+                g.total_seconds += t->seconds;
+            }
+            g.error = stats::summarize(errors[o]);
+            g.fitness = stats::summarize(fitness);
+            if (g.runs) g.mean_evaluations = evaluations / static_cast<double>(g.runs);
+            if (prob.named_parameters && g.runs)
+                for (int j = 0; j < prob.dimension; ++j) {
+                    std::vector<double> v;
+                    for (const auto* t : trials)
+                        if (t->best_position.size() == prob.dimension) v.push_back(t->best_position[j]);
+                    g.parameters.push_back(stats::summarize(v));
+                }
+        }
+        for (std::size_t o = 0; o < info.optimizers.size(); ++o)
+            for (const auto& ref : info.references) {
+                const std::size_t r = index_of(info, ref);
+                auto& slot = out[p][o].versus.emplace_back();
+                if (r == o || r >= info.optimizers.size() || errors[o].empty() || errors[r].empty()) continue;
+                slot = Versus{stats::wilcoxon_rank_sum(errors[o], errors[r]).p, stats::vargha_delaney_a12(errors[o], errors[r])};
+            }
+    }
+    return out;
 }
 
 }  // namespace
@@ -95,6 +124,7 @@ TrialGroups group_trials(const ExperimentInfo& info, const std::vector<TrialReco
 
 std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
     const auto groups = group_trials(info, records);
+    const auto summaries = summarize_groups(info, groups);
     std::string md = fmt::format("# {}\n\n", info.name);
     if (!info.description.empty()) md += info.description + "\n\n";
     md += fmt::format("Config `{}`; {} trials per pair; master seed {}; budget: {}.\n\n",
@@ -128,26 +158,16 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
         rule += "---|";
         md += header + "\n" + rule + "\n";
         for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
-            const auto& trials = groups.ok[p][o];
-            const auto errors = errors_of(prob, trials);
-            const auto s = stats::summarize(errors);
-            std::string runs = std::to_string(trials.size());
-            if (groups.failed[p][o]) runs += fmt::format(" ({} failed)", groups.failed[p][o]);
+            const auto& g = summaries[p][o];
+            const auto& s = g.error;
+            std::string runs = std::to_string(g.runs);
+            if (g.failed) runs += fmt::format(" ({} failed)", g.failed);
             md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |", info.optimizers[o].label, runs,
                               s.n ? num(s.mean) : "–", s.n ? num(s.sd) : "–", s.n ? num(s.median) : "–",
-                              s.n ? num(s.min) : "–", s.n ? num(s.max) : "–", num(evaluations_mean(trials)));
-            for (const auto& ref : info.references) {
-                const std::size_t r = index_of(info, ref);
-                if (r == o || r >= info.optimizers.size() || trials.empty() || groups.ok[p][r].empty()) {
-                    md += " – | – |";
-                    continue;
-                }
-                const auto ref_errors = errors_of(prob, groups.ok[p][r]);
-                const auto test = stats::wilcoxon_rank_sum(errors, ref_errors);
-                const double a12 = stats::vargha_delaney_a12(errors, ref_errors);
-                md += fmt::format(" {} | {} ({}) |", pval(test.p), fmt::format("{:.2f}", a12), stats::a12_magnitude(a12));
-            }
-            md += fmt::format(" {} |\n", trials.empty() ? "–" : num(seconds_sum(trials) / static_cast<double>(trials.size())));
+                              s.n ? num(s.min) : "–", s.n ? num(s.max) : "–", num(g.mean_evaluations));
+            for (const auto& v : g.versus)
+                md += v ? fmt::format(" {} | {:.2f} ({}) |", pval(v->p), v->a12, stats::a12_magnitude(v->a12)) : " – | – |";
+            md += fmt::format(" {} |\n", num(g.mean_seconds()));
         }
         md += "\n";
 
@@ -166,8 +186,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
             auto fixed_row = [&](const std::string& label, const Vector& v, std::optional<double> fitness) {
                 std::string row = "| " + label + " |";
                 for (Eigen::Index j = 0; j < v.size(); ++j) {
-                    const double err = target ? 100.0 * std::abs(v[j] - (*target)[j]) / std::abs((*target)[j]) : std::nan("");
-                    row += fmt::format(" {} | {} | |", num(v[j]), fmt::format("{:.3g}", err));
+                    row += fmt::format(" {} | {:.3g} | |", num(v[j]), error_percent(v[j], target, j));
                 }
                 row += fmt::format(" {} | | |\n", fitness ? num(*fitness) : "");
                 return row;
@@ -177,19 +196,14 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                 md += fixed_row(prob.truth.reference_label.empty() ? "reference" : prob.truth.reference_label,
                                 *prob.truth.reference_solution, prob.truth.reference_fitness);
             for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
-                const auto& trials = groups.ok[p][o];
-                if (trials.empty()) continue;
-                const auto ps = parameter_stats(trials, prob.dimension);
+                const auto& g = summaries[p][o];
+                if (!g.runs) continue;
                 std::string row = "| " + info.optimizers[o].label + " |";
                 for (int j = 0; j < prob.dimension; ++j) {
-                    const auto& s = ps.per_parameter[static_cast<std::size_t>(j)];
-                    const double err = target ? 100.0 * std::abs(s.mean - (*target)[j]) / std::abs((*target)[j]) : std::nan("");
-                    row += fmt::format(" {} | {} | {} |", num(s.mean), fmt::format("{:.3g}", err), num(s.sd));
+                    const auto& s = g.parameters[static_cast<std::size_t>(j)];
+                    row += fmt::format(" {} | {:.3g} | {} |", num(s.mean), error_percent(s.mean, target, j), num(s.sd));
                 }
-                std::vector<double> fit;
-                for (const auto* t : trials) fit.push_back(t->best_fitness);
-                const auto fs = stats::summarize(fit);
-                row += fmt::format(" {} | {} | {} |\n", num(fs.mean), num(fs.sd), num(seconds_sum(trials)));
+                row += fmt::format(" {} | {} | {} |\n", num(g.fitness.mean), num(g.fitness.sd), num(g.total_seconds));
                 md += row;
             }
             for (const auto& pub : info.published) {
@@ -199,8 +213,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                     const auto& n = prob.parameter_names[static_cast<std::size_t>(j)];
                     auto m = pub.mean.find(n);
                     auto d = pub.sd.find(n);
-                    const double err = (m != pub.mean.end() && target) ? 100.0 * std::abs(m->second - (*target)[j]) / std::abs((*target)[j])
-                                                                      : std::nan("");
+                    const double err = m != pub.mean.end() ? error_percent(m->second, target, j) : std::nan("");
                     row += fmt::format(" {} | {} | {} |", m != pub.mean.end() ? num(m->second) : "–", fmt::format("{:.3g}", err),
                                        d != pub.sd.end() ? num(d->second) : "–");
                 }
@@ -242,10 +255,9 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
         for (std::size_t p = 0; p < info.problems.size(); ++p) {
             std::vector<double> row;
             bool complete = true;
-            for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
-                const auto e = errors_of(info.problems[p], groups.ok[p][o]);
-                if (e.empty()) complete = false;
-                row.push_back(e.empty() ? 0.0 : stats::summarize(e).mean);
+            for (const auto& g : summaries[p]) {
+                complete = complete && g.runs > 0;
+                row.push_back(g.runs ? g.error.mean : 0.0);
             }
             if (complete) scores.push_back(std::move(row));
         }
@@ -262,18 +274,18 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
 
     double total = 0;
     std::size_t n = 0, failed = 0;
-    for (std::size_t p = 0; p < info.problems.size(); ++p)
-        for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
-            total += seconds_sum(groups.ok[p][o]);
-            n += groups.ok[p][o].size();
-            failed += groups.failed[p][o];
+    for (const auto& row : summaries)
+        for (const auto& g : row) {
+            total += g.total_seconds;
+            n += g.runs;
+            failed += g.failed;
         }
     md += fmt::format("Total: {} successful trials, {} failed; {:.3f} s of trial time (summed over threads).\n", n, failed, total);
     return md;
 }
 
 std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
-    const auto groups = group_trials(info, records);
+    const auto summaries = summarize_groups(info, group_trials(info, records));
     std::vector<std::string> columns{"problem", "optimizer", "runs", "failed", "mean", "std", "median", "best", "worst",
                                      "mean_evaluations"};
     for (const auto& ref : info.references) {
@@ -305,40 +317,32 @@ std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>
         const auto& prob = info.problems[p];
         const auto& target = accuracy_target(prob);
         for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
-            const auto& trials = groups.ok[p][o];
+            const auto& g = summaries[p][o];
             std::map<std::string, std::string> row;
             row["problem"] = quote(prob.label);
             row["optimizer"] = quote(info.optimizers[o].label);
-            row["runs"] = std::to_string(trials.size());
-            row["failed"] = std::to_string(groups.failed[p][o]);
-            const auto errors = errors_of(prob, trials);
-            if (!errors.empty()) {
-                const auto s = stats::summarize(errors);
-                row["mean"] = full(s.mean);
-                row["std"] = full(s.sd);
-                row["median"] = full(s.median);
-                row["best"] = full(s.min);
-                row["worst"] = full(s.max);
-                row["mean_evaluations"] = full(evaluations_mean(trials));
-                row["mean_time_s"] = full(seconds_sum(trials) / static_cast<double>(trials.size()));
-                row["total_time_s"] = full(seconds_sum(trials));
+            row["runs"] = std::to_string(g.runs);
+            row["failed"] = std::to_string(g.failed);
+            if (g.runs) {
+                row["mean"] = full(g.error.mean);
+                row["std"] = full(g.error.sd);
+                row["median"] = full(g.error.median);
+                row["best"] = full(g.error.min);
+                row["worst"] = full(g.error.max);
+                row["mean_evaluations"] = full(g.mean_evaluations);
+                row["mean_time_s"] = full(g.mean_seconds());
+                row["total_time_s"] = full(g.total_seconds);
             }
-            for (const auto& ref : info.references) {
-                const std::size_t r = index_of(info, ref);
-                if (r == o || r >= info.optimizers.size() || trials.empty() || groups.ok[p][r].empty()) continue;
-                const auto ref_errors = errors_of(prob, groups.ok[p][r]);
-                row["p_vs_" + ref] = full(stats::wilcoxon_rank_sum(errors, ref_errors).p);
-                row["a12_vs_" + ref] = full(stats::vargha_delaney_a12(errors, ref_errors));
-            }
-            if (prob.named_parameters && !trials.empty()) {
-                const auto ps = parameter_stats(trials, prob.dimension);
-                for (int j = 0; j < prob.dimension; ++j) {
-                    const auto& n = prob.parameter_names[static_cast<std::size_t>(j)];
-                    const auto& s = ps.per_parameter[static_cast<std::size_t>(j)];
-                    row[n + "_mean"] = full(s.mean);
-                    row[n + "_std"] = full(s.sd);
-                    if (target) row[n + "_err_pct"] = full(100.0 * std::abs(s.mean - (*target)[j]) / std::abs((*target)[j]));
+            for (std::size_t k = 0; k < info.references.size(); ++k)
+                if (const auto& v = g.versus[k]) {
+                    row["p_vs_" + info.references[k]] = full(v->p);
+                    row["a12_vs_" + info.references[k]] = full(v->a12);
                 }
+            for (std::size_t j = 0; j < g.parameters.size(); ++j) {
+                const auto& n = prob.parameter_names[j];
+                row[n + "_mean"] = full(g.parameters[j].mean);
+                row[n + "_std"] = full(g.parameters[j].sd);
+                if (target) row[n + "_err_pct"] = full(error_percent(g.parameters[j].mean, target, static_cast<Eigen::Index>(j)));
             }
             for (std::size_t i = 0; i < columns.size(); ++i) out += (i ? "," : "") + row[columns[i]];
             out += "\n";
