@@ -26,7 +26,11 @@ std::string slug(const std::string& label);
 bool render_gnuplot(const std::filesystem::path& base, const std::string& script_body, int width, int height,
                     std::string& error);
 
-// A gnuplot string literal (double quotes, escaped).
+// A gnuplot string literal for a script: single-quoted, so gnuplot runs no backquoted command
+// in it; control characters become blanks so the literal cannot end the command.
 std::string gnuplot_quote(const std::string& text);
+
+// A string column of a gnuplot data file (double-quoted, control characters as blanks).
+std::string gnuplot_data_string(const std::string& text);
 
 }  // namespace mhb

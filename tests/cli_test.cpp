@@ -1,7 +1,6 @@
 // End to end through the `mhbench` binary, as a user runs it.
 #include <catch2/catch.hpp>
 
-#include <cstdlib>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -9,6 +8,7 @@
 
 #include "framework/results_store.hpp"
 #include "framework/statistics.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -16,13 +16,11 @@ using namespace mhb;
 namespace {
 struct Outcome {
     int code;
-    std::string err;
+    std::string err;  // standard output and error together
 };
 Outcome run_cli(const std::string& args, const testing::TemporaryDirectory& dir) {
-    const auto err = dir.path() / "stderr.txt";
-    const std::string command = std::string(MHBENCH_CLI) + " " + args + " > " + (dir.path() / "stdout.txt").string() + " 2> " + err.string();
-    const int status = std::system(command.c_str());
-    return {WEXITSTATUS(status), testing::read_file(err)};
+    const auto run = testing::run_mhbench(args, dir.path() / "stdout.txt");
+    return {run.exit_code, run.output};
 }
 
 // table.csv without the run-time columns, which are the only ones allowed to differ between runs.

@@ -1,12 +1,13 @@
 #pragma once
-// Runs the `mhbench` binary as a user does and collects its exit code and output.
-#include <cstdlib>
+// Runs the `mhbench` binary as a user does and collects its exit code and output. No shell runs in
+// between: each argument reaches mhbench as written, which the injection tests rely on.
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
-#include <sys/wait.h>
+#include "framework/process.hpp"
 
 namespace mhb::testing {
 
@@ -15,14 +16,37 @@ struct CliRun {
     std::string output;  // stdout and stderr
 };
 
-// `arguments` go to a shell: quote what it must not split. The output passes through `log`.
-inline CliRun run_mhbench(const std::string& arguments, const std::filesystem::path& log) {
-    const std::string command = std::string(MHBENCH_CLI) + " " + arguments + " > " + log.string() + " 2>&1";
-    const int status = std::system(command.c_str());
+inline CliRun run_mhbench(const std::vector<std::string>& arguments, const std::filesystem::path& log) {
+    std::vector<std::string> argv{MHBENCH_CLI};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    const auto outcome = run_program(argv, std::nullopt, log);
     std::ifstream in(log);
     std::stringstream text;
     text << in.rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+    return {outcome.started ? outcome.exit_code : -1, text.str()};
+}
+
+// `arguments` split at blanks; single quotes keep a blank inside one argument (as in a shell, but
+// nothing else of a shell's syntax means anything).
+inline CliRun run_mhbench(const std::string& arguments, const std::filesystem::path& log) {
+    std::vector<std::string> argv;
+    std::string current;
+    bool quoted = false, any = false;
+    for (char c : arguments) {
+        if (c == '\'') {
+            quoted = !quoted;
+            any = true;
+        } else if (c == ' ' && !quoted) {
+            if (any) argv.push_back(current);
+            current.clear();
+            any = false;
+        } else {
+            current += c;
+            any = true;
+        }
+    }
+    if (any) argv.push_back(current);
+    return run_mhbench(argv, log);
 }
 
 }  // namespace mhb::testing

@@ -116,3 +116,18 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     CHECK(run.exit_code == 2);
     CHECK(run.output.find("error: --model: rs_thermal.alpha: 0.01 is outside the plausible range [0.0035, 0.0045] 1/K") != std::string::npos);
 }
+
+TEST_CASE("mhbench diagnose --report into a directory named in shell syntax runs nothing", "[pmsm][diagnosis][cli][plots]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "hidden.csv";
+    write_measurement(csv, diagnosis_data({{"encoder_offset", {}}}));
+    const auto marker = dir.path() / "pwned";
+    const auto report = dir.path() / ("rep_$(touch " + marker.string() + ")`touch " + marker.string() + "`'");
+    const auto run = run_mhbench(std::vector<std::string>{"diagnose", "--data", csv.string(), "--model", "base", "--report", report.string()},
+                                 dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    REQUIRE(std::filesystem::exists(report / "report.md"));
+    REQUIRE(std::filesystem::exists(report / "candidates.png"));
+    REQUIRE_FALSE(std::filesystem::exists(marker));
+}

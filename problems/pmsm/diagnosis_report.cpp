@@ -239,7 +239,7 @@ std::string segment_rms_bars(Plotter& plot, const Diagnosis& d) {
     const fs::path file = plot.data("segment_rms");
     std::ofstream out(file);
     out << "# label before_total model_total\n";
-    for (const auto& c : d.segments) out << fmt::format("{} {:.6g} {:.6g}\n", gnuplot_quote(c.label), c.before.rms.total, c.model.rms.total);
+    for (const auto& c : d.segments) out << fmt::format("{} {:.6g} {:.6g}\n", gnuplot_data_string(c.label), c.before.rms.total, c.model.rms.total);
     out.close();
     const double floor = std::sqrt((d.noise.sigma.squaredNorm()) / 2.0);
     std::string body = fmt::format("set title {} noenhanced\nset style data histograms\nset style histogram clustered gap 1\n",
@@ -263,7 +263,7 @@ std::string apparent_plot(Plotter& plot, const Diagnosis& d) {
     std::ofstream out(file);
     out << "# index label then value standard_error per parameter (NaN: not determined by that segment)\n";
     for (std::size_t s = 0; s < d.segments.size(); ++s) {
-        out << s << " " << gnuplot_quote(d.segments[s].label);
+        out << s << " " << gnuplot_data_string(d.segments[s].label);
         for (const auto& a : d.segments[s].apparent)
             out << (a.determined ? fmt::format(" {:.8g} {:.8g}", a.value, a.standard_error) : std::string(" NaN NaN"));
         out << "\n";
@@ -302,8 +302,8 @@ std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
         return 0;
     };
     for (std::size_t k = 0; k < d.candidates.size(); ++k)
-        out << fmt::format("{} {} {:.6g} {} {}\n", k, gnuplot_quote("+" + d.candidates[k].effect), d.candidates[k].fit.rms.total,
-                           colour(d.candidates[k].verdict), gnuplot_quote(to_string(d.candidates[k].verdict)));
+        out << fmt::format("{} {} {:.6g} {} {}\n", k, gnuplot_data_string("+" + d.candidates[k].effect), d.candidates[k].fit.rms.total,
+                           colour(d.candidates[k].verdict), gnuplot_data_string(to_string(d.candidates[k].verdict)));
     out.close();
     const double floor = std::sqrt((d.noise.sigma.squaredNorm()) / 2.0);
     std::string body = fmt::format("set title {} noenhanced\nset style fill solid 0.85 border -1\nset boxwidth 0.7\nset grid y\n",
