@@ -54,6 +54,15 @@ public:
         for (auto& word : s_) word = splitmix64(sm);
         has_spare_normal_ = false;
     }
+    // The raw 256-bit state, as in the reference implementation's s[0..3] (must not be all zero);
+    // for checking against published output streams.
+    void set_state(std::uint64_t s0, std::uint64_t s1, std::uint64_t s2, std::uint64_t s3) {
+        s_[0] = s0;
+        s_[1] = s1;
+        s_[2] = s2;
+        s_[3] = s3;
+        has_spare_normal_ = false;
+    }
     static constexpr result_type min() { return 0; }
     static constexpr result_type max() { return ~result_type{0}; }
 

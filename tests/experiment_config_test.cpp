@@ -100,7 +100,7 @@ TEST_CASE("grid expansion is the cartesian product in declaration order", "[expe
     REQUIRE(std::get<std::int64_t>(grid[2].at("a")) == 2);
 }
 
-TEST_CASE("a problem's box can be replaced from the config; lower > upper is refused", "[experiment_config]") {
+TEST_CASE("a problem's box can be replaced from the config, and lower > upper is refused", "[experiment_config]") {
     testing::TemporaryDirectory dir;
     const std::string base = "name = \"b\"\ntrials = 1\nseed = 1\n[budget]\niterations = 2\n"
                              "[[optimizer]]\nname = \"random_search\"\n[[problem]]\nname = \"test_sphere\"\n";

@@ -88,7 +88,7 @@ TEST_CASE("a = 2 - 2l/T with l = 0..T-1 for GWO.m, and gen/G for the library var
     }
 }
 
-TEST_CASE("GWO.m's move is unconditional; greedy_top3 never lets a wolf get worse", "[gwo]") {
+TEST_CASE("GWO.m's move is unconditional, and greedy_top3 never lets a wolf get worse", "[gwo]") {
     testing::ShiftedSphere sphere(5, -10, 10, 2.0);
     for (const auto& variant : kVariants) {
         GreyWolfOptimizer gwo(20, parse_gwo_variant(variant));

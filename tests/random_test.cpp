@@ -12,15 +12,32 @@
 
 using mhb::Rng;
 
-TEST_CASE("xoshiro256++ matches the reference output for a known state", "[random]") {
-    // Reference: the first outputs of xoshiro256++ seeded by SplitMix64 from 0 are fixed by the
-    // algorithm definitions; two generators with one seed agree, different seeds differ.
+TEST_CASE("xoshiro256++ reproduces the reference implementation's output stream", "[random]") {
+    // State s = {0, 0, 0, 1} run through Blackman and Vigna's xoshiro256plusplus.c: its first ten
+    // outputs (as published with an independent port's test data).
+    mhb::Rng rng;
+    rng.set_state(0, 0, 0, 1);
+    const std::uint64_t expected[] = {0x0000000000800000ULL, 0x0000000000800011ULL, 0x0002200000800011ULL, 0x0002200044000020ULL,
+                                      0x00022000448008A1ULL, 0x01102100802208A0ULL, 0x0114002284200880ULL, 0x0402896644A64095ULL,
+                                      0x8A14A0A244ACC891ULL, 0x8C88BA4680B20495ULL};
+    for (std::uint64_t value : expected) REQUIRE(rng() == value);
+}
+
+TEST_CASE("one seed gives one stream, and neighbouring seeds differ", "[random]") {
     Rng a(42), b(42), c(43);
+    int equal_to_neighbour = 0;
     for (int i = 0; i < 1000; ++i) {
         const auto va = a();
         REQUIRE(va == b());
-        if (i == 0) REQUIRE(va != c());
+        equal_to_neighbour += va == c() ? 1 : 0;
     }
+    REQUIRE(equal_to_neighbour == 0);
+}
+
+TEST_CASE("FNV-1a, which names seeds, reproduces its published test vectors", "[random]") {
+    REQUIRE(mhb::stable_hash("") == 0xCBF29CE484222325ULL);
+    REQUIRE(mhb::stable_hash("a") == 0xAF63DC4C8601EC8CULL);
+    REQUIRE(mhb::stable_hash("foobar") == 0x85944171F73967E8ULL);
 }
 
 TEST_CASE("SplitMix64 reproduces its published first value", "[random]") {
@@ -36,7 +53,6 @@ TEST_CASE("derived seeds depend on every component", "[random]") {
             for (const char* prob : {"F1", "F2"})
                 for (std::uint64_t t = 0; t < 10; ++t) seeds.insert(mhb::derive_seed(master, opt, prob, t));
     REQUIRE(seeds.size() == 2 * 2 * 2 * 10);
-    REQUIRE(mhb::derive_seed(7, "gwo", "F1", 3) == mhb::derive_seed(7, "gwo", "F1", 3));
 }
 
 namespace {

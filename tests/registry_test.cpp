@@ -5,7 +5,7 @@
 
 using namespace mhb;
 
-TEST_CASE("plugins found case-insensitively; unknown names list what exists", "[registry]") {
+TEST_CASE("plugins found case-insensitively, and unknown names list what exists", "[registry]") {
     REQUIRE(OptimizerRegistry::instance().find("random_search") != nullptr);
     REQUIRE(OptimizerRegistry::instance().find("RANDOM_SEARCH") != nullptr);
     try {

@@ -1,6 +1,8 @@
 #include "framework/cli/commands.hpp"
 
 #include <cstdio>
+#include <filesystem>
+#include <new>
 #include <map>
 #include <vector>
 
@@ -59,6 +61,18 @@ int run(int argc, char** argv) {
             std::fprintf(stderr, "error: %s\n", e.what());
             return exit_bad_input;
         } catch (const UnknownPlugin& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            return exit_bad_input;
+        } catch (const std::filesystem::filesystem_error& e) {
+            // Its message already names the path(s).
+            std::fprintf(stderr, "error: %s\n", e.what());
+            return exit_bad_input;
+        } catch (const std::bad_alloc&) {
+            std::fprintf(stderr, "error: out of memory: the input asks for more than this machine has; use a smaller file, "
+                                 "fewer samples or a smaller budget\n");
+            return exit_bad_input;
+        } catch (const std::exception& e) {
+            // Last resort: whatever escaped is still a message and exit code 2, never an abort.
             std::fprintf(stderr, "error: %s\n", e.what());
             return exit_bad_input;
         }
