@@ -89,6 +89,15 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     CHECK(first["parameters"]["encoder_offset.offset"]["ci95"].size() == 2);
     CHECK(first["parameters"]["Rs"]["value"].get<double>() > 0.0);
     for (std::size_t k = 1; k < j["candidates"].size(); ++k) CHECK(j["candidates"][k]["rms_after"]["total"].is_number());
+    // The search over sets: one step, to the recommended model, whose rms is that candidate's.
+    CHECK(j["recommended_model"] == "base+encoder_offset");
+    REQUIRE(j["path"].size() == 2);
+    CHECK(j["path"][0]["model"] == "base");
+    CHECK(j["path"][0]["rms"].get<double>() == j["rms"]["total"].get<double>());
+    CHECK(j["path"][1]["model"] == "base+encoder_offset");
+    CHECK(j["path"][1]["rms"].get<double>() == first["rms_after"]["total"].get<double>());
+    CHECK(j["path"][1]["dbic"].get<double>() < -10.0);
+    CHECK(run.output.find("next: mhbench fit --data " + csv.string() + " --model base+encoder_offset") != std::string::npos);
 
     // The report: every image it shows exists, and it names the missing effect.
     const std::string md = mhb::testing::read_file(report / "report.md");
@@ -99,9 +108,9 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     for (auto it = std::sregex_iterator(md.begin(), md.end(), image); it != std::sregex_iterator(); ++it, ++images)
         CHECK(std::filesystem::exists(report / (*it)[1].str()));
     for (const char* png : {"residual_time.png", "residual_angle.png", "residual_speed.png", "residual_current.png", "residual_temperature.png",
-                            "segment_rms.png", "apparent_parameters.png", "candidates.png"})
+                            "segment_rms.png", "apparent_parameters.png", "candidates.png", "path.png"})
         CHECK(md.find(png) != std::string::npos);
-    CHECK(images == 8);
+    CHECK(images == 9);
 
     // The next round shows the error before and after.
     run = run_mhbench("diagnose --data " + csv.string() + " --model base+encoder_offset --report " + report.string(), dir.path() / "log");

@@ -36,8 +36,8 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         options.fit.seed = o->seed;
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
-        if (diagnosis.winner)
-            fmt::print("\nnext: mhbench fit --data {} --model {}\n", o->data, spec.with(*diagnosis.winner).text());
+        if (diagnosis.recommended.text() != spec.text())
+            fmt::print("\nnext: mhbench fit --data {} --model {}\n", o->data, diagnosis.recommended.text());
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;

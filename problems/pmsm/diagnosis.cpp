@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
@@ -465,11 +466,17 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
     // Segment means: each has variance long_run^2 / n_s under noise alone.
     l.dof = 2 * static_cast<int>(ranges.size()) - static_cast<int>(fit.free_count());
     l.means_available = l.dof > 0;
+    double means_energy = 0.0;
     for (const auto& r : ranges)
-        for (int a = 0; a < 2; ++a)
-            l.statistic += static_cast<double>(r.rows) * std::pow(fit.residual.segment(a * n + r.first, r.rows).mean() / noise.long_run[a], 2);
+        for (int a = 0; a < 2; ++a) {
+            const double mean = fit.residual.segment(a * n + r.first, r.rows).mean();
+            l.statistic += static_cast<double>(r.rows) * std::pow(mean / noise.long_run[a], 2);
+            means_energy += static_cast<double>(r.rows) * mean * mean;
+        }
     l.p_value = l.means_available ? chi_squared_survival(l.statistic, l.dof) : 1.0;
     bool significant = l.means_available && l.p_value < significance;
+    // Structure counts once it is significant: the means when they are, each significant harmonic.
+    double structure_energy = significant ? means_energy : 0.0;
 
     std::vector<std::string> parts;
     if (data.theta_e) {
@@ -505,12 +512,15 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
             l.harmonics.push_back(harmonic);
             if (p_min < significance / tests) {
                 significant = true;
+                structure_energy += 0.5 * static_cast<double>(n) * harmonic.amplitude.squaredNorm();
                 parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)", h,
                                             1e3 * harmonic.amplitude[0], 1e3 * harmonic.amplitude[1], 1e3 * harmonic.standard_error));
             }
         }
     }
     l.significant = significant;
+    const double noise_energy = static_cast<double>(n) * noise.sigma.squaredNorm();
+    l.structure = noise_energy > 0.0 ? structure_energy / noise_energy : 0.0;
     if (l.means_available && l.p_value < significance) {
         // Which operating condition the segment means follow most closely, per axis.
         const auto segments = segment_residuals(data, fit.residual);
@@ -603,7 +613,8 @@ const char* unit_of(const std::string& variable) {
     return "A";
 }
 
-int rank_of(Verdict v) { return static_cast<int>(v); }
+// Supported and partial share a rank: between them the evidence decides.
+int rank_of(Verdict v) { return v == Verdict::Partial ? static_cast<int>(Verdict::Supported) : static_cast<int>(v); }
 
 std::string join(const std::vector<std::string>& items) {
     std::string out;
@@ -616,6 +627,165 @@ std::string experiment_list(const std::vector<Experiment>& experiments) {
     for (std::size_t k = 0; k < experiments.size(); ++k)
         out += fmt::format("{}{} ({})", k == 0 ? "" : k + 1 == experiments.size() ? " or " : ", ", experiments[k].name, experiments[k].description);
     return out;
+}
+
+Identifiability identifiability_of(double unique) {
+    return !(unique >= absorbed_below) ? Identifiability::NotIdentifiable
+           : unique < clear_above      ? Identifiability::MostlyAbsorbed
+                                       : Identifiability::Identifiable;
+}
+
+// ---- the search over sets of effects ----
+
+struct Addition {
+    std::string effect;
+    ModelFit fit;
+    int added_parameters = 0;
+};
+
+// `fit`'s model with each of `effects` added in turn, from `fit`'s values, only the new effect's
+// parameters searched. The fits are independent, so they run in parallel with the same result on
+// any number of threads.
+std::vector<Addition> fit_additions(const Measurement& data, const ModelSpec& spec, const ModelFit& fit,
+                                    const std::vector<std::string>& effects, const FitOptions& options) {
+    std::vector<Addition> out(effects.size());
+    tbb::parallel_for(std::size_t{0}, effects.size(), [&](std::size_t k) {
+        const ModelSpec extended = spec.with(effects[k]);
+        const auto extended_model = make_model(extended, data);
+        Eigen::VectorXd start = extended_model->parameters_of(MotorParameters{});
+        start.head(fit.values.size()) = fit.values;
+        std::vector<Eigen::Index> search;
+        for (Eigen::Index j = fit.values.size(); j < start.size(); ++j) search.push_back(j);
+        out[k] = {effects[k], fit_model(data, extended, options, &start, search), static_cast<int>(search.size())};
+    });
+    return out;
+}
+
+// The noise measured on the best-fitting of `fits`, with the overdispersion of its segment means.
+NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const ModelFit*>& fits) {
+    const ModelFit* best = fits.front();
+    for (const auto* f : fits)
+        if (f->rss() < best->rss()) best = f;
+    NoiseEstimate noise = estimate_noise(data, *best);
+    const LackOfFit l = lack_of_fit(data, *best, noise);
+    if (l.means_available) noise.dispersion = std::max(1.0, l.statistic / l.dof);
+    return noise;
+}
+
+struct SearchStep {
+    ModelFit fit;
+    std::string added;         // "+effect", "-effect" when pruned, empty for the start
+    int added_parameters = 0;  // negative when pruned
+};
+
+struct SetSearch {
+    std::vector<SearchStep> steps;  // steps[0]: the model diagnosed
+    std::vector<std::string> pruned;
+    std::vector<std::string> tie;   // when the search stopped on two or more effects it cannot order
+    ModelSpec tie_spec;
+    Eigen::VectorXd tie_values;
+};
+
+// Whether `candidate` predicts held-out segments at least as well as the model it extends on a
+// majority of them (true without leave-one-out).
+bool predicts_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds) {
+    if (model_folds.empty()) return true;
+    const auto folds = leave_one_segment_out(data, candidate.spec, candidate.values);
+    int better = 0;
+    for (std::size_t k = 0; k < folds.size(); ++k) better += folds[k] < model_folds[k] ? 1 : 0;
+    return 2 * better >= static_cast<int>(folds.size());
+}
+
+// Forward selection with backward pruning (docs/effects.md, "Several effects at once"). Each round
+// adds the library effect with the strongest evidence (dBIC with the effective sample count, the
+// noise measured on the round's best fit) among those the design can identify and that predict
+// held-out segments; plausibility is not asked of a single step, only of the set the search ends
+// with, because one missing effect biases the values that another takes alone. It stops when no
+// effect is supported, or on a tie. Then each added effect that the others now explain (its
+// removal costs less than strong evidence) is pruned, the weakest first.
+SetSearch search_effect_sets(const Measurement& data, const Measurement& design, const ModelSpec& spec, const ModelFit& model,
+                             const std::vector<std::string>& library, const std::vector<Candidate>& first_round,
+                             const DiagnosisOptions& options) {
+    SetSearch s;
+    s.steps.push_back({model, "", 0});
+    std::vector<Addition> round;
+    for (const auto& c : first_round) round.push_back({c.effect, c.fit, c.added_parameters});
+    while (!round.empty() && static_cast<int>(s.steps.size()) - 1 < options.max_effects) {
+        const ModelFit current = s.steps.back().fit;
+        std::vector<const ModelFit*> fits{&current};
+        for (const auto& a : round) fits.push_back(&a.fit);
+        const NoiseEstimate noise = noise_of_best(data, fits);
+        const double log_n = std::log(std::max(noise.effective_samples, 2.0));
+        std::vector<std::pair<double, const Addition*>> supported;
+        for (const auto& a : round) {
+            const double dbic = -likelihood_ratio(current, a.fit, noise) + a.added_parameters * log_n;
+            if (dbic > supported_bic) continue;
+            if (identifiability_of(most_distinct(design_unique_fractions(design, current.spec, current.values, a.effect))) ==
+                Identifiability::NotIdentifiable)
+                continue;
+            supported.emplace_back(dbic, &a);
+        }
+        std::stable_sort(supported.begin(), supported.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+        const std::vector<double> current_folds =
+            options.leave_one_out ? leave_one_segment_out(data, current.spec, current.values) : std::vector<double>{};
+        std::size_t chosen = supported.size();
+        for (std::size_t k = 0; k < supported.size() && chosen == supported.size(); ++k)
+            if (predicts_held_out(data, supported[k].second->fit, current_folds)) chosen = k;
+        if (chosen == supported.size()) break;
+        const Addition& best = *supported[chosen].second;
+        // A tie: another supported effect that the evidence does not separate from the best, or that
+        // the design cannot tell apart from it at all.
+        std::vector<std::string> tie{best.effect};
+        for (std::size_t k = chosen + 1; k < supported.size(); ++k) {
+            const auto& other = *supported[k].second;
+            const bool close = supported[k].first - supported[chosen].first < tie_margin;
+            const bool confounded =
+                !close && std::max(most_distinct(design_unique_fractions(design, current.spec, current.values, other.effect, best.effect)),
+                                   most_distinct(design_unique_fractions(design, current.spec, current.values, best.effect, other.effect))) <
+                              clear_above;
+            if ((close || confounded) && predicts_held_out(data, other.fit, current_folds)) tie.push_back(other.effect);
+        }
+        if (tie.size() > 1) {
+            s.tie = tie;
+            s.tie_spec = current.spec;
+            s.tie_values = current.values;
+            break;
+        }
+        s.steps.push_back({best.fit, "+" + best.effect, best.added_parameters});
+        std::vector<std::string> rest;
+        for (const auto& e : library)
+            if (!best.fit.spec.contains(e)) rest.push_back(e);
+        round = fit_additions(data, best.fit.spec, best.fit, rest, options.fit);
+    }
+
+    // Backward pruning, only of what the search added and only once two effects are there.
+    while (s.steps.back().fit.spec.effects.size() >= spec.effects.size() + 2) {
+        const ModelFit current = s.steps.back().fit;
+        const NoiseEstimate noise = noise_of_best(data, {&current});
+        const double log_n = std::log(std::max(noise.effective_samples, 2.0));
+        std::optional<SearchStep> weakest;
+        double weakest_bic = supported_bic;
+        for (const auto& term : current.spec.effects) {
+            if (spec.contains(term.name)) continue;
+            const ModelSpec reduced = current.spec.without(term.name);
+            const auto reduced_model = make_model(reduced, data);
+            const auto& names = reduced_model->parameter_names();
+            Eigen::VectorXd start(static_cast<Eigen::Index>(names.size()));
+            for (std::size_t j = 0; j < names.size(); ++j) start[static_cast<Eigen::Index>(j)] = current.values[current.index_of(names[j])];
+            ModelFit reduced_fit = polish_model(data, reduced, start, options.fit.covariance);
+            const int removed = static_cast<int>(current.free_count() - reduced_fit.free_count());
+            // Evidence for keeping the effect, given all the others.
+            const double keep_bic = -likelihood_ratio(reduced_fit, current, noise) + removed * log_n;
+            if (keep_bic > weakest_bic) {
+                weakest_bic = keep_bic;
+                weakest = SearchStep{std::move(reduced_fit), "-" + term.name, -removed};
+            }
+        }
+        if (!weakest) break;
+        s.pruned.push_back(weakest->added.substr(1));
+        s.steps.push_back(std::move(*weakest));
+    }
+    return s;
 }
 
 }  // namespace
@@ -632,6 +802,7 @@ const char* to_string(Identifiability level) {
 const char* to_string(Verdict verdict) {
     switch (verdict) {
         case Verdict::Supported: return "supported";
+        case Verdict::Partial: return "partial";
         case Verdict::Weak: return "weak";
         case Verdict::NotSupported: return "not supported";
         case Verdict::Implausible: return "implausible";
@@ -658,6 +829,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.mean_equations = 2 * static_cast<int>(ranges.size());
 
     // Candidates: every library effect not in the model whose columns the data have.
+    std::vector<std::string> library;
     for (const auto* entry : EffectRegistry::instance().entries()) {
         if (spec.contains(entry->name)) continue;
         try {
@@ -666,22 +838,24 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
             out.not_tried.push_back({entry->name, e.field()});
             continue;
         }
+        library.push_back(entry->name);
+    }
+    for (auto& a : fit_additions(data, spec, out.model, library, options.fit)) {
         Candidate c;
-        c.effect = entry->name;
-        const ModelSpec extended = spec.with(entry->name);
-        const auto extended_model = make_model(extended, data);
-        Eigen::VectorXd start = extended_model->parameters_of(MotorParameters{});
-        start.head(out.model.values.size()) = out.model.values;
-        std::vector<Eigen::Index> search;
-        for (Eigen::Index j = out.model.values.size(); j < start.size(); ++j) search.push_back(j);
-        c.added_parameters = static_cast<int>(search.size());
-        c.fit = fit_model(data, extended, options.fit, &start, search);
+        c.effect = a.effect;
+        c.added_parameters = a.added_parameters;
+        c.fit = std::move(a.fit);
         for (int j = 0; j < 4; ++j) c.base_shift[j] = c.fit.values[j] / out.model.values[j] - 1.0;
         out.candidates.push_back(std::move(c));
     }
 
-    // The noise, measured where the residual is smallest.
-    const ModelFit* reference = &out.model;
+    const Measurement design = design_of(data);
+    const SetSearch search = search_effect_sets(data, design, spec, out.model, library, out.candidates, options);
+    out.pruned = search.pruned;
+
+    // The noise, measured where the residual is smallest: on the last set of the search or on a
+    // single addition, whichever fits best.
+    const ModelFit* reference = &search.steps.back().fit;
     for (const auto& c : out.candidates)
         if (c.fit.rss() < reference->rss()) reference = &c.fit;
     out.noise = estimate_noise(data, *reference);
@@ -690,6 +864,13 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     const LackOfFit reference_fit = lack_of_fit(data, *reference, out.noise);
     if (reference_fit.means_available) out.noise.dispersion = std::max(1.0, reference_fit.statistic / reference_fit.dof);
     const double log_n = std::log(std::max(out.noise.effective_samples, 2.0));
+    // The excess residual: what the model leaves above the within-segment noise.
+    const double floor_rss = static_cast<double>(data.size()) * out.noise.sigma.squaredNorm();
+    auto explained = [&](const ModelFit& fit) {
+        const double excess = out.model.rss() - floor_rss;
+        if (!(excess > 0.0)) return 0.0;
+        return std::clamp((out.model.rss() - fit.rss()) / excess, 0.0, 1.0);
+    };
 
     check_base(out.model, out.base_problems);
     out.base_plausible = out.base_problems.empty();
@@ -697,7 +878,6 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     if (options.leave_one_out) model_folds = leave_one_segment_out(data, spec, out.model.values);
     if (!model_folds.empty()) out.model_loso_rms = pooled_rms(model_folds, data.size());
 
-    const Measurement design = design_of(data);
     out.segments = segment_conditions(data, out.model, spec.effects.empty() ? nullptr : &out.steps.front());
     for (auto& s : out.segments) {
         const auto r = ranges[static_cast<std::size_t>(&s - out.segments.data())];
@@ -708,13 +888,12 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     for (auto& c : out.candidates) {
         c.likelihood_ratio = likelihood_ratio(out.model, c.fit, out.noise);
         c.delta_bic = -c.likelihood_ratio + c.added_parameters * log_n;
+        c.explained = explained(c.fit);
         check_base(c.fit, c.implausible);
         check_effects(c.fit, c.implausible);
         c.plausible = c.implausible.empty();
         c.unique_fraction = most_distinct(design_unique_fractions(design, spec, out.model.values, c.effect));
-        c.identifiability = !(c.unique_fraction >= absorbed_below) ? Identifiability::NotIdentifiable
-                            : c.unique_fraction < clear_above    ? Identifiability::MostlyAbsorbed
-                                                                 : Identifiability::Identifiable;
+        c.identifiability = identifiability_of(c.unique_fraction);
         if (c.identifiability != Identifiability::Identifiable)
             c.experiments = revealing_experiments(design, proposals, spec, out.model.values, c.effect);
         if (c.identifiability == Identifiability::NotIdentifiable) c.absorption = absorption_of(data, spec, out.model, c, out.noise);
@@ -728,45 +907,52 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
             // the range, where a polynomial extrapolates, must not outvote all the others.
             predicts = 2 * c.loso_better >= c.loso_segments;
         }
+        const bool strong = c.delta_bic <= supported_bic && predicts;
         if (c.identifiability == Identifiability::NotIdentifiable) c.verdict = Verdict::NotIdentifiable;
-        else if (!c.plausible) c.verdict = Verdict::Implausible;
-        else if (c.delta_bic <= supported_bic && predicts) c.verdict = Verdict::Supported;
+        else if (!c.plausible) c.verdict = strong ? Verdict::Partial : Verdict::Implausible;
+        else if (strong) c.verdict = Verdict::Supported;
         else if (c.delta_bic <= weak_bic) c.verdict = Verdict::Weak;
         else c.verdict = Verdict::NotSupported;
     }
+    // Supported and partial candidates are ordered by their evidence alone: an effect that explains
+    // most of the residual but is biased by another missing one must not fall behind one that
+    // explains little.
     std::stable_sort(out.candidates.begin(), out.candidates.end(), [](const Candidate& a, const Candidate& b) {
         if (rank_of(a.verdict) != rank_of(b.verdict)) return rank_of(a.verdict) < rank_of(b.verdict);
         return a.delta_bic < b.delta_bic;
     });
 
-    // Verdicts.
+    // The path, scored with the final noise estimate so that its steps compare with each other.
     out.lack_of_fit = lack_of_fit(data, out.model, out.noise);
-    const bool top_supported = !out.candidates.empty() && out.candidates.front().verdict == Verdict::Supported;
-    out.missing_effect_found = top_supported;
-    if (top_supported) {
-        const auto& top = out.candidates.front();
-        out.tie.push_back(top.effect);
-        for (std::size_t k = 1; k < out.candidates.size(); ++k) {
-            const auto& c = out.candidates[k];
-            if (c.verdict != Verdict::Supported) continue;
-            // A tie: the evidence does not prefer one strongly, or the design cannot tell the two
-            // apart at all (each one's signature lies in the span of the other's and the model's), so
-            // that what separates their scores is parsimony or noise.
-            const bool close = c.delta_bic - top.delta_bic < tie_margin;
-            const bool confounded =
-                !close && std::max(most_distinct(design_unique_fractions(design, spec, out.model.values, c.effect, top.effect)),
-                                   most_distinct(design_unique_fractions(design, spec, out.model.values, top.effect, c.effect))) < clear_above;
-            if (close || confounded) out.tie.push_back(c.effect);
-        }
-        if (out.tie.size() == 1) {
-            out.winner = top.effect;
-            out.tie.clear();
-            out.after_winner = lack_of_fit(data, top.fit, out.noise);
-        } else {
-            out.tie_experiments = revealing_experiments(design, proposals, spec, out.model.values, out.tie[0], out.tie[1]);
-        }
+    for (std::size_t k = 0; k < search.steps.size(); ++k) {
+        PathStep step;
+        step.fit = search.steps[k].fit;
+        step.added = search.steps[k].added;
+        step.delta_bic = k == 0 ? 0.0
+                                : -likelihood_ratio(search.steps[k - 1].fit, step.fit, out.noise) +
+                                      search.steps[k].added_parameters * log_n;
+        step.explained = explained(step.fit);
+        check_base(step.fit, step.implausible);
+        check_effects(step.fit, step.implausible);
+        step.plausible = step.implausible.empty();
+        const LackOfFit left = lack_of_fit(data, step.fit, out.noise);
+        step.at_noise_floor = !left.significant || left.structure < options.floor_tolerance;
+        out.path.push_back(std::move(step));
     }
-    out.not_in_library = !top_supported && out.lack_of_fit.significant;
+    const PathStep& last = out.path.back();
+    // A search that stopped on a tie found what it could: the rest is one of the tied effects.
+    const bool found = out.path.size() > 1 && last.plausible && (last.at_noise_floor || !search.tie.empty());
+    out.recommended = found ? last.fit.spec : spec;
+    out.tie = search.tie;
+    out.missing_effect_found = found || !out.tie.empty();
+    if (found && out.tie.empty()) {
+        out.winner = out.path[1].added.substr(1);
+        out.after_winner = lack_of_fit(data, out.path[1].fit, out.noise);
+    }
+    if (!out.tie.empty()) out.tie_experiments = revealing_experiments(design, proposals, search.tie_spec, search.tie_values, out.tie[0], out.tie[1]);
+    // "Not in the library" only when no set of library effects reaches the noise floor with
+    // plausible values while the model does not.
+    out.not_in_library = out.lack_of_fit.significant && !found && out.tie.empty();
 
     apparent_values(*model, out.model, out.noise, out.segments, out.apparent_names);
     out.drifts = drifts_of(out.segments, out.apparent_names);
@@ -791,34 +977,74 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
             "temperature signature is absorbed into these parameters without leaving a residual, and cannot be checked on this data.",
             ranges.size(), out.mean_equations, unknowns, m.spec.text()));
     for (const auto& p : out.base_problems) f.push_back("The fitted model is physically impossible: " + p + ". Something is missing or the design cannot determine it.");
-    if (out.winner) {
-        const auto& w = out.candidates.front();
+    const PathStep& end = out.path.back();
+    auto effect_values = [](const ModelFit& fit, Eigen::Index from) {
         std::string values;
-        for (Eigen::Index j = m.values.size(); j < w.fit.values.size(); ++j)
-            values += fmt::format("{}{} = {:.4g} {}", values.empty() ? "" : ", ", w.fit.names[static_cast<std::size_t>(j)], w.fit.values[j],
-                                  w.fit.units[static_cast<std::size_t>(j)]);
-        f.push_back(fmt::format("Missing effect: {} (its fit: {}). Adding it lowers the residual to {:.4g} V rms; evidence dBIC = {:.1f}{}.", w.effect,
-                                values, w.fit.rms.total, w.delta_bic,
-                                out.candidates.size() > 1 ? fmt::format(", the next best ({}) {:.1f}", out.candidates[1].effect, out.candidates[1].delta_bic)
-                                                          : std::string()));
-        if (out.after_winner && out.after_winner->significant)
-            f.push_back("After adding " + w.effect + " the residual still has structure (" + out.after_winner->signature +
-                        "): another effect is missing as well; diagnose " + spec.with(w.effect).text() + " next.");
-        if (w.identifiability == Identifiability::MostlyAbsorbed)
-            f.push_back(fmt::format("Only {:.0f} % of {}'s signature is its own on this design; the rest shifts the base parameters (Rs {}, Ld {}, Lq {}, "
-                                    "psi_f {} when it is added).",
-                                    100.0 * w.unique_fraction, w.effect, percent(w.base_shift[0]), percent(w.base_shift[1]), percent(w.base_shift[2]),
-                                    percent(w.base_shift[3])));
-    } else if (!out.tie.empty()) {
-        f.push_back(fmt::format("Near tie: {} explain the residual about equally well (dBIC within {:g}) or cannot be told apart on this "
+        for (Eigen::Index j = from; j < fit.values.size(); ++j)
+            values += fmt::format("{}{} = {:.4g} {}", values.empty() ? "" : ", ", fit.names[static_cast<std::size_t>(j)], fit.values[j],
+                                  fit.units[static_cast<std::size_t>(j)]);
+        return values;
+    };
+    if (out.missing_effect_found && out.path.size() > 1) {
+        std::vector<std::string> added;
+        for (const auto& e : end.fit.spec.effects)
+            if (!spec.contains(e.name)) added.push_back(e.name);
+        const double floor = std::sqrt(out.noise.sigma.squaredNorm() / 2.0);
+        if (added.size() == 1) {
+            const Candidate* w = nullptr;
+            for (const auto& c : out.candidates)
+                if (c.effect == added.front()) w = &c;
+            const Candidate* next = nullptr;
+            for (const auto& c : out.candidates)
+                if (&c != w && !next) next = &c;
+            f.push_back(fmt::format("Missing effect: {} (its fit: {}). Adding it lowers the residual to {:.4g} V rms; evidence dBIC = {:.1f}{}.",
+                                    added.front(), effect_values(end.fit, m.values.size()), end.fit.rms.total, w ? w->delta_bic : end.delta_bic,
+                                    next ? fmt::format(", the next best ({}) {:.1f}", next->effect, next->delta_bic) : std::string()));
+        } else {
+            std::string steps;
+            for (std::size_t k = 1; k < out.path.size(); ++k)
+                steps += fmt::format("{} {} {:.4g} V (dBIC {:.1f})", k == 1 ? "" : ",", out.path[k].added, out.path[k].fit.rms.total, out.path[k].delta_bic);
+            f.push_back(fmt::format("Missing effects: {} together (recommended model {}; their fit: {}). The residual falls from {:.4g} V rms "
+                                    "step by step:{}, to the noise floor of {:.3g} V.",
+                                    join(added), end.fit.spec.text(), effect_values(end.fit, m.values.size()), m.rms.total, steps, floor));
+        }
+        if (out.winner) {
+            const Candidate* w = nullptr;
+            for (const auto& c : out.candidates)
+                if (c.effect == *out.winner) w = &c;
+            if (w && w->identifiability == Identifiability::MostlyAbsorbed)
+                f.push_back(fmt::format("Only {:.0f} % of {}'s signature is its own on this design; the rest shifts the base parameters (Rs {}, Ld {}, "
+                                        "Lq {}, psi_f {} when it is added).",
+                                        100.0 * w->unique_fraction, w->effect, percent(w->base_shift[0]), percent(w->base_shift[1]),
+                                        percent(w->base_shift[2]), percent(w->base_shift[3])));
+        }
+    }
+    for (const auto& c : out.candidates)
+        if (c.verdict == Verdict::Partial)
+            f.push_back(fmt::format("Alone, {} explains {:.0f} % of the excess residual (dBIC {:.1f}) but takes implausible values ({}): another effect "
+                                    "is still missing{}.",
+                                    c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(),
+                                    out.missing_effect_found ? ", and the search over sets of effects added it" : ""));
+    for (const auto& p : out.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
+    if (!out.tie.empty()) {
+        const std::string after = out.path.size() > 1 ? "After " + end.fit.spec.text() + ", " : std::string();
+        f.push_back(fmt::format("{}Near tie: {} explain the {}residual about equally well (dBIC within {:g}) or cannot be told apart on this "
                                 "design; the data cannot say which is missing.",
-                                join(out.tie), tie_margin));
+                                after, join(out.tie), out.path.size() > 1 ? "remaining " : "", tie_margin));
         f.push_back(out.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
                                                 : "An experiment that would separate them: " + experiment_list(out.tie_experiments) + ".");
     } else if (out.not_in_library) {
-        f.push_back("The residual has structure that no library effect explains: the missing effect is not in the library. Its signature: " +
-                    out.lack_of_fit.signature + ".");
-    } else {
+        const LackOfFit remaining = out.path.size() > 1 ? lack_of_fit(data, end.fit, out.noise) : out.lack_of_fit;
+        std::string text = "No set of library effects reaches the noise floor with plausible values: the missing effect is not in the library.";
+        if (out.path.size() > 1)
+            text += fmt::format(" The best set the library offers, {}, explains {:.0f} % of the excess residual{}; its effects may be real or may "
+                                "absorb part of the unknown one, so it is not recommended.",
+                                end.fit.spec.text(), 100.0 * end.explained,
+                                end.plausible ? std::string() : " but takes implausible values (" + end.implausible.front() + ")");
+        text += " The signature" + std::string(out.path.size() > 1 && remaining.significant ? " of what it leaves" : "") + ": " +
+                (remaining.significant ? remaining.signature : out.lack_of_fit.signature) + ".";
+        f.push_back(text);
+    } else if (!out.missing_effect_found) {
         f.push_back(out.lack_of_fit.means_available || data.theta_e
                         ? "No missing effect: the residual is at the noise floor and no library effect earns its parameters."
                         : "No missing effect can be seen on this data.");

@@ -24,6 +24,11 @@ namespace mhb::pmsm {
 struct DiagnosisOptions {
     FitOptions fit;
     bool leave_one_out = true;  // leave-one-segment-out prediction (needs 3 segments or more)
+    int max_effects = 6;        // effects the search over sets may add to the model
+    // A set reaches the noise floor when its residual has no significant structure, or structure
+    // with less than this fraction of the noise power (the steady-state model's own error on effects
+    // that make the currents ripple, docs/effects.md).
+    double floor_tolerance = 0.25;
 };
 
 struct NoiseEstimate {
@@ -55,7 +60,9 @@ struct Absorption {
     std::vector<std::pair<std::string, double>> impossible_from;  // base parameter, effect value where it reaches zero (inside the range)
 };
 
-enum class Verdict { Supported, Weak, NotSupported, Implausible, NotIdentifiable };
+// Partial: strong evidence and good prediction, but the values it takes alone are implausible: it
+// explains part of the excess residual while another effect is still missing (it biases the fit).
+enum class Verdict { Supported, Partial, Weak, NotSupported, Implausible, NotIdentifiable };
 const char* to_string(Verdict verdict);
 
 struct Candidate {
@@ -73,7 +80,19 @@ struct Candidate {
     std::vector<Experiment> experiments;  // what would reveal it (when not clearly identifiable)
     std::vector<Absorption> absorption;   // when not identifiable
     Eigen::Vector4d base_shift;           // candidate's base parameters relative to the model's, minus 1
+    double explained = 0.0;               // fraction of the model's excess residual (over the noise floor) it removes
     Verdict verdict = Verdict::NotSupported;
+};
+
+// One step of the search over sets of effects: the model after adding `added` to the previous step.
+struct PathStep {
+    ModelFit fit;
+    std::string added;                    // empty for the first step (the model diagnosed)
+    double delta_bic = 0.0;               // against the previous step (0 for the first)
+    double explained = 0.0;               // fraction of the first step's excess residual removed so far
+    bool plausible = true;                // the whole set's values (base and effects)
+    std::vector<std::string> implausible;
+    bool at_noise_floor = false;          // no lack of fit left (segment means and angle harmonics)
 };
 
 struct NotTried {
@@ -95,6 +114,7 @@ struct LackOfFit {
     double p_value = 1.0;
     std::vector<Harmonic> harmonics;  // when theta_e is logged
     bool significant = false;         // means or any harmonic beyond chance (p < 1e-3 after Bonferroni)
+    double structure = 0.0;           // power of the significant structure (means, harmonics) relative to the noise's
     std::string signature;            // in words
 };
 
@@ -141,10 +161,17 @@ struct Diagnosis {
     std::vector<Candidate> candidates;  // ranked, best first
     std::vector<NotTried> not_tried;
     bool missing_effect_found = false;
-    std::optional<std::string> winner;   // unless a tie
-    std::vector<std::string> tie;        // effects the evidence cannot order
+    std::optional<std::string> winner;   // the first effect of the recommended set (unless a tie)
+    std::vector<std::string> tie;        // effects the evidence cannot order (at the step where the search stopped)
     std::vector<Experiment> tie_experiments;
     bool not_in_library = false;
+    // The search over sets of effects (forward selection with backward pruning, docs/effects.md):
+    // the steps from the model diagnosed to the last set the evidence supports, the effects pruned
+    // again because the others explain them, and the recommendation: the last set when it reaches
+    // the noise floor with plausible values, the model diagnosed otherwise.
+    std::vector<PathStep> path;
+    std::vector<std::string> pruned;
+    ModelSpec recommended;
     std::vector<std::string> findings;   // plain statements, most important first
 };
 

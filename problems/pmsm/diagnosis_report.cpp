@@ -286,6 +286,31 @@ std::string apparent_plot(Plotter& plot, const Diagnosis& d) {
     return plot.render("apparent_parameters", body, 1100, 330 * rows + 120);
 }
 
+// The residual after each step of the search over sets of effects, falling to the noise floor.
+std::string path_plot(Plotter& plot, const Diagnosis& d) {
+    if (d.path.size() < 2) return {};
+    const fs::path file = plot.data("path");
+    std::ofstream out(file);
+    out << "# step label rms_total rms_u_d rms_u_q plausible\n";
+    for (std::size_t k = 0; k < d.path.size(); ++k) {
+        const auto& step = d.path[k];
+        out << fmt::format("{} {} {:.6g} {:.6g} {:.6g} {}\n", k, gnuplot_data_string(step.added.empty() ? step.fit.spec.text() : step.added),
+                           step.fit.rms.total, step.fit.rms.d, step.fit.rms.q, step.plausible ? 1 : 0);
+    }
+    out.close();
+    const double floor = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
+    std::string body = fmt::format("set title {} noenhanced\nset grid\nset ylabel 'rms residual (V)'\nset logscale y\n",
+                                   gnuplot_quote("Residual after each step of the search, down to the noise floor (open circles: implausible values)"));
+    body += fmt::format("set xrange [-0.4:{}]\nset xtics rotate by -25 noenhanced\nset key top right\nset bmargin 6\n", static_cast<double>(d.path.size()) - 0.6);
+    body += fmt::format("plot {0} using 1:3:xtic(2) with linespoints lw 2 pt 7 ps 1.5 lc rgb '{1}' title 'u_d and u_q combined', "
+                        "{0} using 1:($6 > 0 ? NaN : $3) with points pt 6 ps 2.5 lw 2 lc rgb '#c0392b' title 'implausible values', "
+                        "{0} using 1:4 with linespoints dt 3 pt 4 lc rgb '#777777' title 'u_d', "
+                        "{0} using 1:5 with linespoints dt 3 pt 8 lc rgb '#aaaaaa' title 'u_q', "
+                        "{2:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {3}\n",
+                        gnuplot_quote(file.string()), model_colour, floor, gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))));
+    return plot.render("path", body, 1000, 520);
+}
+
 std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
     if (d.candidates.empty()) return {};
     const fs::path file = plot.data("candidates");
@@ -294,6 +319,7 @@ std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
     auto colour = [](Verdict v) {
         switch (v) {
             case Verdict::Supported: return 0x2e8b57;
+            case Verdict::Partial: return 0x8fbc5a;
             case Verdict::Weak: return 0xe6a817;
             case Verdict::NotSupported: return 0x9e9e9e;
             case Verdict::Implausible: return 0xc0392b;
@@ -311,7 +337,7 @@ std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
     body += "set ylabel 'rms residual (V)'\nset yrange [0:*]\nset xtics rotate by -30 noenhanced\nset key outside right top\nset bmargin 6\n";
     body += fmt::format("set xrange [-0.6:{}]\n", static_cast<double>(d.candidates.size()) - 0.4);
     std::string plots = fmt::format("{} using 1:3:4:xtic(2) with boxes lc rgb variable notitle", gnuplot_quote(file.string()));
-    for (Verdict v : {Verdict::Supported, Verdict::Weak, Verdict::NotSupported, Verdict::Implausible, Verdict::NotIdentifiable})
+    for (Verdict v : {Verdict::Supported, Verdict::Partial, Verdict::Weak, Verdict::NotSupported, Verdict::Implausible, Verdict::NotIdentifiable})
         plots += fmt::format(", NaN with boxes lc rgb '#{:06x}' title {}", colour(v), gnuplot_quote(to_string(v)));
     plots += fmt::format(", {:.6g} with lines lw 2 lc rgb '#1b6fb5' title {} noenhanced", d.model.rms.total,
                          gnuplot_quote(d.model.spec.text() + " alone"));
@@ -368,6 +394,20 @@ json diagnosis_json(const Diagnosis& d) {
     out["tie"] = d.tie;
     out["tie_experiments"] = experiments_json(d.tie_experiments);
     out["not_in_library"] = d.not_in_library;
+    out["recommended_model"] = d.recommended.text();
+    json path = json::array();
+    for (const auto& step : d.path)
+        path.push_back({{"model", step.fit.spec.text()},
+                        {"added", step.added.empty() ? json(nullptr) : json(step.added)},
+                        {"rms", step.fit.rms.total},
+                        {"rms_axes", rms_json(step.fit.rms)},
+                        {"dbic", step.delta_bic},
+                        {"explained", step.explained},
+                        {"plausible", step.plausible},
+                        {"implausible", step.implausible},
+                        {"at_noise_floor", step.at_noise_floor}});
+    out["path"] = path;
+    out["pruned"] = d.pruned;
     out["findings"] = d.findings;
     json candidates = json::array();
     for (const auto& c : d.candidates) {
@@ -381,6 +421,7 @@ json diagnosis_json(const Diagnosis& d) {
         e["added_parameters"] = c.added_parameters;
         e["likelihood_ratio"] = c.likelihood_ratio;
         e["delta_bic"] = c.delta_bic;
+        e["explained"] = c.explained;
         e["loso_rms"] = c.loso_rms ? json(*c.loso_rms) : json(nullptr);
         e["loso_better_segments"] = c.loso_segments > 0 ? json::array({c.loso_better, c.loso_segments}) : json(nullptr);
         e["identifiability"] = to_string(c.identifiability);
@@ -461,6 +502,17 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
     return t;
 }
 
+static std::string path_text(const Diagnosis& d) {
+    std::string t = "search over sets of effects:\n";
+    t += fmt::format("  {:<52} {:>10} {:>11} {:>10}  {}\n", "model", "rms (V)", "dBIC", "explained", "plausible");
+    for (const auto& step : d.path)
+        t += fmt::format("  {:<52} {:>10.4g} {:>11} {:>9.0f}%  {}{}\n", (step.added.empty() ? "" : step.added + " -> ") + step.fit.spec.text(),
+                         step.fit.rms.total, step.added.empty() ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
+                         step.plausible ? "yes" : "no", step.at_noise_floor ? ", at the noise floor" : "");
+    t += fmt::format("recommended model: {}\n", d.recommended.text());
+    return t;
+}
+
 std::string diagnosis_text(const Diagnosis& d) {
     std::string t = fmt::format("data: {} ({} samples in {} segments)\nmodel: {}: residual rms u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n\n",
                                 d.source, d.samples, d.segments.size(), d.model.spec.text(), d.model.rms.d, d.model.rms.q, d.model.rms.total);
@@ -471,7 +523,7 @@ std::string diagnosis_text(const Diagnosis& d) {
         t += fmt::format("{:<4} {:<16} {:<17} {:>12.4g} {:>11.1f} {:>12} {}\n", k + 1, c.effect, to_string(c.verdict), c.fit.rms.total, c.delta_bic,
                          c.loso_rms ? fmt::format("{:.4g}", *c.loso_rms) : std::string("—"), to_string(c.identifiability));
     }
-    t += "\n";
+    t += "\n" + path_text(d) + "\n";
     for (const auto& f : d.findings) t += "- " + f + "\n";
     return t;
 }
@@ -495,6 +547,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     const std::string rms_png = segment_rms_bars(plot, d);
     const std::string apparent_png = apparent_plot(plot, d);
     const std::string candidates_png = candidate_plot(plot, d);
+    const std::string path_png = path_plot(plot, d);
 
     const auto& m = d.model;
     std::string md = fmt::format("# Diagnosis of `{}` on `{}`\n\n", m.spec.text(), data_path);
@@ -503,8 +556,26 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     md += "## What the diagnosis says\n\n";
     for (const auto& f : d.findings) md += "- " + f + "\n";
     md += "\n";
-    if (d.winner || !d.tie.empty()) {
-        const std::string next = d.winner ? m.spec.with(*d.winner).text() : m.spec.with(d.tie.front()).text();
+    md += "## The search over sets of effects\n\n";
+    md += "Forward selection with backward pruning: each step adds the library effect with the strongest evidence that the design can "
+          "identify and that predicts held-out segments; plausibility is judged on the whole set, so a step may pass through values "
+          "that one effect takes alone while another is still missing (docs/effects.md, \"Several effects at once\"). dBIC of each "
+          "step against the one before, with the final noise estimate; explained: share of the excess residual of `" + m.spec.text() +
+          "` over the noise floor.\n\n";
+    md += "| step | model | rms (mV) | dBIC | explained | plausible | at the noise floor |\n|---|---|---|---|---|---|---|\n";
+    for (std::size_t k = 0; k < d.path.size(); ++k) {
+        const auto& step = d.path[k];
+        md += fmt::format("| {} | `{}` | {} | {} | {:.0f} % | {} | {} |\n", step.added.empty() ? std::string("start") : step.added, step.fit.spec.text(),
+                          mv(step.fit.rms.total), k == 0 ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
+                          step.plausible ? "yes" : "no: " + step.implausible.front(), step.at_noise_floor ? "yes" : "no");
+    }
+    md += fmt::format("\n**Recommended model: `{}`**{}\n\n", d.recommended.text(),
+                      d.recommended.text() == m.spec.text() ? (d.not_in_library ? " (no set of library effects reaches the noise floor with plausible values)"
+                                                                                : " (nothing is missing)")
+                                                            : "");
+    md += image(path_png, "residual after each step of the search");
+    if (d.recommended.text() != m.spec.text() || !d.tie.empty()) {
+        const std::string next = d.recommended.text() != m.spec.text() ? d.recommended.text() : m.spec.with(d.tie.front()).text();
         md += fmt::format("Next step:\n\n    mhbench fit --data {} --model {}\n    mhbench diagnose --data {} --model {} --report <dir>\n\n", data_path,
                           next, data_path, next);
     }
@@ -611,7 +682,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     md += "\n" + image(candidates_png, "residual with each candidate effect");
     for (std::size_t k = 0; k < d.candidates.size(); ++k) {
         const auto& c = d.candidates[k];
-        if (k >= 3 && c.verdict != Verdict::Supported) break;
+        if (k >= 3 && c.verdict != Verdict::Supported && c.verdict != Verdict::Partial) break;
         md += fmt::format("### {}. `{}`: {}\n\n", k + 1, m.spec.with(c.effect).text(), to_string(c.verdict));
         md += parameter_table(c.fit) + "\n";
         md += fmt::format("Base parameters against `{}`: Rs {}, Ld {}, Lq {}, psi_f {}.\n\n", m.spec.text(), fmt::format("{:+.2f} %", 100 * c.base_shift[0]),

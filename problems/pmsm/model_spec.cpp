@@ -118,6 +118,12 @@ ModelSpec ModelSpec::with(const std::string& effect) const {
     return out;
 }
 
+ModelSpec ModelSpec::without(const std::string& effect) const {
+    ModelSpec out = *this;
+    std::erase_if(out.effects, [&](const EffectTerm& e) { return e.name == effect; });
+    return out;
+}
+
 ModelSpec ModelSpec::prefix(std::size_t count) const {
     ModelSpec out;
     out.effects.assign(effects.begin(), effects.begin() + static_cast<std::ptrdiff_t>(std::min(count, effects.size())));

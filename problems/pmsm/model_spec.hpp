@@ -25,6 +25,8 @@ struct ModelSpec {
     bool contains(const std::string& effect) const;
     // This spec with one more effect (its parameters all free).
     ModelSpec with(const std::string& effect) const;
+    // This spec less one effect (no change when it has none of that name).
+    ModelSpec without(const std::string& effect) const;
     // The first `count` effects: base+A+B -> base+A for count 1.
     ModelSpec prefix(std::size_t count) const;
 };
