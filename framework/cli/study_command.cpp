@@ -55,7 +55,7 @@ const bool registered = register_command("study", [](CLI::App& app) {
         std::error_code ec;
         std::filesystem::create_directories(spec.output, ec);
         if (ec) throw InputError(spec.output.string(), 0, "output", "cannot create the directory: " + ec.message());
-        const auto run = pmsm::run_study(spec, pmsm::DiagnosisOptions{}, [&](std::size_t done, std::size_t total) {
+        const auto run = pmsm::run_study(spec, pmsm::study_cases(spec), pmsm::DiagnosisOptions{}, [&](std::size_t done, std::size_t total) {
             if (!o->quiet && (done % 10 == 0 || done == total)) std::fprintf(stderr, "\r%zu of %zu drives diagnosed", done, total);
             if (!o->quiet && done == total) std::fprintf(stderr, "\n");
         });

@@ -270,9 +270,10 @@ std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_
     return toml_text(profile);
 }
 
-StudyRun run_study(const StudySpec& spec, const DiagnosisOptions& options, const std::function<void(std::size_t, std::size_t)>& progress) {
+StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const DiagnosisOptions& options,
+                   const std::function<void(std::size_t, std::size_t)>& progress) {
     StudyRun run;
-    run.cases = study_cases(spec);
+    run.cases = std::move(cases);
     const ModelSpec model = parse_model_spec(spec.model);
     const std::size_t total = run.cases.size() * spec.seeds.size();
     run.records.resize(total);

@@ -83,9 +83,9 @@ struct StudyRun {
     std::vector<StudyRecord> records;   // case-major, then seed order
 };
 
-// Runs every case at every seed in parallel (TBB); the records do not depend on the thread count.
+// Runs every case (from study_cases, or some of them) at every seed in parallel (TBB); the records do not depend on the thread count.
 // `progress` (optional) is called after each finished drive with the count done and the total.
-StudyRun run_study(const StudySpec& spec, const DiagnosisOptions& options,
+StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const DiagnosisOptions& options,
                    const std::function<void(std::size_t, std::size_t)>& progress = {});
 
 // The simulation profile of one case at one seed, as TOML text (the profile with the case's settings

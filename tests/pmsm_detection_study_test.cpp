@@ -1,0 +1,120 @@
+// The hidden-effect study: its file format and refusals, the cases it makes, the Wilson interval,
+// and, run over several noise seeds, the search over sets of effects finding clear single effects,
+// pairs and a triple exactly, with no false alarm on clean data.
+#include <catch2/catch.hpp>
+
+#include <toml++/toml.h>
+
+#include "framework/input_error.hpp"
+#include "problems/pmsm/detection_study.hpp"
+#include "problems/pmsm/simulation_profile.hpp"
+#include "tests/temporary_directory.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+
+namespace {
+
+std::string study_text(const std::string& profile, const std::string& extra, const std::string& seeds = "3") {
+    return "name = \"t\"\ndescription = \"test\"\nprofile = \"" + profile + "\"\nseeds = " + seeds + "\noutput = \"out\"\n" + extra;
+}
+
+const std::string deadtime = "[[effect]]\nname = \"deadtime\"\nclear = { effects.deadtime = { voltage = 0.28, current_band = 0.01 } }\n"
+                             "weak = { effects.deadtime = { voltage = 0.03 } }\n";
+const std::string rs_thermal = "[[effect]]\nname = \"rs_thermal\"\nclear = { effects.rs_thermal = { alpha = 0.00393 } }\n"
+                               "weak = { effects.rs_thermal = {}, temperature.winding = [[0.0, 25.0], [5.0, 30.0]] }\n";
+const std::string psi_thermal = "[[effect]]\nname = \"psi_thermal\"\nclear = { effects.psi_thermal = { alpha = -0.001 } }\n"
+                                "weak = { effects.psi_thermal = {}, temperature.magnet = [[0.0, 25.0], [5.0, 30.0]] }\n";
+
+std::string profile_path() { return std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/diagnosis_profile.toml"; }
+
+}  // namespace
+
+TEST_CASE("the Wilson interval matches its closed form at known points", "[pmsm][study]") {
+    // 0 of 10: upper end z^2 / (n + z^2); 10 of 10 mirrors it; 5 of 10 is symmetric about 1/2.
+    const double z2 = 1.959963984540054 * 1.959963984540054;
+    auto [lo0, hi0] = wilson_interval(0, 10);
+    CHECK(lo0 == 0.0);
+    CHECK(hi0 == Approx(z2 / (10 + z2)).epsilon(1e-12));
+    auto [lo10, hi10] = wilson_interval(10, 10);
+    CHECK(lo10 == Approx(1.0 - hi0).epsilon(1e-12));
+    CHECK(hi10 == Approx(1.0).epsilon(1e-12));
+    auto [lo5, hi5] = wilson_interval(5, 10);
+    CHECK(lo5 + hi5 == Approx(1.0));
+    CHECK(lo5 == Approx(0.2365931).epsilon(1e-6));
+}
+
+TEST_CASE("a study file makes clean, single, pair, triple and outside cases with merged settings", "[pmsm][study]") {
+    testing::TemporaryDirectory dir;
+    const auto file = dir.write("s.toml", study_text(profile_path(), "triples = [[\"deadtime\", \"psi_thermal\", \"rs_thermal\"]]\n" + deadtime +
+                                                                         rs_thermal + psi_thermal +
+                                                                         "[[outside]]\nname = \"offset_on_u_q\"\nsettings = { effects.voltage_offset = { u_d = 0.0, u_q = 0.05 } }\n"));
+    const auto spec = read_study(file);
+    CHECK(spec.seeds == std::vector<std::uint64_t>{1, 2, 3});
+    const auto cases = study_cases(spec);
+    // clean + 3 effects x 2 magnitudes + 3 pairs + 1 triple + 1 outside
+    REQUIRE(cases.size() == 1 + 6 + 3 + 1 + 1);
+    CHECK(cases.front().kind == "clean");
+    CHECK(cases.front().truth.empty());
+    const auto& triple = cases[10];
+    CHECK(triple.kind == "triple");
+    CHECK(triple.truth == std::vector<std::string>{"deadtime", "psi_thermal", "rs_thermal"});
+    CHECK(cases.back().outside);
+
+    // The case's profile: the study's settings and the seed merged into the profile, which the
+    // simulator then reads with its own checks.
+    const auto text = case_profile(spec, triple, 2);
+    const auto sim = parse_simulation_profile(text, "merged", spec.profile.parent_path());
+    CHECK(sim.seed == 2);
+    REQUIRE(sim.effects.size() == 3);
+    const auto weak = case_profile(spec, cases[5], 1);  // rs_thermal near the limit: 5 K winding rise
+    const auto weak_sim = parse_simulation_profile(weak, "merged", spec.profile.parent_path());
+    CHECK(weak_sim.temp_winding.at(5.0) == 30.0);
+    CHECK(weak_sim.temp_magnet.at(5.0) == 85.0);  // the profile's own
+}
+
+TEST_CASE("a bad study file is refused naming the file, line and field", "[pmsm][study]") {
+    testing::TemporaryDirectory dir;
+    auto refused = [&](const std::string& text, const std::string& expected) {
+        const auto file = dir.write("bad.toml", text);
+        try {
+            const auto spec = read_study(file);
+            study_cases(spec);
+            FAIL("accepted: " << text);
+        } catch (const InputError& e) {
+            CHECK_THAT(e.what(), Catch::Contains(expected));
+        }
+    };
+    refused(study_text(profile_path(), "colour = 3\n"), "bad.toml:6: colour: unknown key");
+    refused(study_text(profile_path(), "[[effect]]\nname = \"deadtiem\"\nclear = {}\nweak = {}\n"), "bad.toml:7: effect[0].name: ");
+    refused(study_text(profile_path(), "pairs = [[\"deadtime\", \"delay\"]]\n" + deadtime), "pairs: 'delay' is not one of the study's [[effect]] names");
+    refused(study_text(profile_path(), "[[effect]]\nname = \"delay\"\nclear = 3\nweak = {}\n"), "bad.toml:8: effect[0].clear: expects a table");
+    // Two effects that set one profile key differently cannot make one drive.
+    refused(study_text(profile_path(), "[[effect]]\nname = \"rs_thermal\"\nclear = { effects.rs_thermal = {}, temperature.winding = [[0.0, 25.0], [5.0, 30.0]] }\n"
+                                       "weak = {}\n[[effect]]\nname = \"voltage_offset\"\n"
+                                                    "clear = { effects.voltage_offset = {}, temperature.winding = [[0.0, 20.0]] }\nweak = {}\n"),
+            "temperature.winding: set differently by ");
+}
+
+TEST_CASE("over several noise seeds the search finds clear effects alone, in pairs and as a triple, and nothing on clean data",
+          "[pmsm][study][hidden]") {
+    testing::TemporaryDirectory dir;
+    const auto file = dir.write("s.toml", study_text(profile_path(),
+                                                     "pairs = [[\"deadtime\", \"rs_thermal\"]]\ntriples = [[\"deadtime\", \"psi_thermal\", \"rs_thermal\"]]\n" +
+                                                         deadtime + rs_thermal + psi_thermal,
+                                                     "[11, 12, 13, 14]"));
+    const auto spec = read_study(file);
+    // Effects near the detection limit are the study's to report, not a test's to assert.
+    auto cases = study_cases(spec);
+    std::erase_if(cases, [](const StudyCase& c) { return c.magnitude == "weak"; });
+    const auto run = run_study(spec, cases, DiagnosisOptions{});
+    REQUIRE(run.records.size() == 4 * (1 + 3 + 1 + 1));
+    for (const auto& r : run.records) {
+        const auto& c = run.cases[r.case_index];
+        INFO(c.label << " seed " << r.seed << ": recommended " << r.recommended);
+        CHECK(r.correct);
+        CHECK(r.false_positives.empty());
+        // Refitted with the right set, the base parameters come back within a few per cent.
+        if (r.correct) CHECK(r.base_error.cwiseAbs().maxCoeff() < 0.05);
+    }
+}
