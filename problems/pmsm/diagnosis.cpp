@@ -937,6 +937,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
         step.plausible = step.implausible.empty();
         const LackOfFit left = lack_of_fit(data, step.fit, out.noise);
         step.at_noise_floor = !left.significant || left.structure < options.floor_tolerance;
+        step.structure = left.significant ? left.structure : 0.0;
+        if (left.significant) step.signature = left.signature;
         out.path.push_back(std::move(step));
     }
     const PathStep& last = out.path.back();
@@ -1008,6 +1010,11 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
                                     "step by step:{}, to the noise floor of {:.3g} V.",
                                     join(added), end.fit.spec.text(), effect_values(end.fit, m.values.size()), m.rms.total, steps, floor));
         }
+        if (!end.signature.empty())
+            f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
+                                    "the steady-state model's own error on effects that make the currents ripple; a larger one would mean "
+                                    "another effect.",
+                                    end.signature, end.structure, options.floor_tolerance));
         if (out.winner) {
             const Candidate* w = nullptr;
             for (const auto& c : out.candidates)

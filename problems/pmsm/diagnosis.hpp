@@ -92,7 +92,9 @@ struct PathStep {
     double explained = 0.0;               // fraction of the first step's excess residual removed so far
     bool plausible = true;                // the whole set's values (base and effects)
     std::vector<std::string> implausible;
-    bool at_noise_floor = false;          // no lack of fit left (segment means and angle harmonics)
+    bool at_noise_floor = false;          // no lack of fit left, or less than the tolerance (DiagnosisOptions)
+    double structure = 0.0;               // power of the significant structure left, relative to the noise's
+    std::string signature;                // of that structure, in words (empty when none is significant)
 };
 
 struct NotTried {
