@@ -82,7 +82,7 @@ TEST_CASE("bad input through the CLI: one message naming file and line, exit cod
     REQUIRE_THAT(out.err, Catch::Contains("bad.toml:8: optimizer[0].batch: must lie in [1, 1000000] (got -3)"));
     out = run_cli("run " + (dir.path() / "missing.toml").string(), dir);
     REQUIRE(out.code == 2);
-    REQUIRE_THAT(out.err, Catch::Contains("missing.toml: no such file"));
+    REQUIRE_THAT(out.err, Catch::Contains("missing.toml: cannot open the experiment file: No such file"));
     out = run_cli("run", dir);
     REQUIRE(out.code == 2);
     out = run_cli("run " + bad.string() + " --threads 0", dir);

@@ -74,6 +74,11 @@ Measurement parse_measurement(const std::string& text, const std::string& source
         start = nl + 1;
     }
 
+    // Checked before any column is filled, so that an oversized file costs no more memory than its text.
+    if (static_cast<std::int64_t>(lines.size()) - 1 > max_measurement_rows)
+        throw InputError(source, 0, "", fmt::format("{} rows after the header; the limit is {} rows", lines.size() - 1,
+                                                     max_measurement_rows));
+
     Measurement m;
     m.source = source;
     const auto header = split_fields(lines[0]);
