@@ -45,8 +45,10 @@ std::unique_ptr<Problem> instantiate(const PluginVariant& v, const ProblemContex
 std::unique_ptr<Problem> create_problem(const ExperimentSpec& spec, const PluginVariant& v, const ProblemContext& ctx) {
     try {
         return instantiate(v, ctx);
-    } catch (const InputError&) {
-        throw;
+    } catch (const InputError& e) {
+        if (e.file() == spec.file.string()) throw;
+        // A file the problem reads (its `data`): say which entry of the config named it.
+        throw InputError(spec.file.string(), v.line, "problem " + v.label, e.what());
     } catch (const std::invalid_argument& e) {
         throw InputError(spec.file.string(), v.bounds_line, v.label + " lower/upper", e.what());
     } catch (const std::exception& e) {

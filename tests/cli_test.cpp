@@ -102,3 +102,27 @@ TEST_CASE("`mhbench list` shows every registered plugin with its parameters", "[
     REQUIRE_THAT(out, Catch::Contains("random_search") && Catch::Contains("batch") && Catch::Contains("bbob_f24") &&
                           Catch::Contains("F23"));
 }
+
+TEST_CASE("unknown names on the command line name the option and suggest the closest name", "[cli]") {
+    testing::TemporaryDirectory dir;
+    auto out = run_cli("fitt --data x.csv", dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::StartsWith("error: command line: unknown command 'fitt'; did you mean 'fit'?") &&
+                              Catch::Contains("\n  diagnose\n"));
+    const auto data = dir.write("d.csv", "i_d,i_q,u_d,u_q,omega_e\n0,0.1,0,1,10\n0,0.2,0,2,20\n");
+    out = run_cli("fit --data " + data.string() + " --optimizer cmaez", dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::StartsWith("error: command line: --optimizer: unknown optimizer 'cmaez'; did you mean 'cmaes'?") &&
+                              Catch::Contains("\n  gwo\n"));
+}
+
+TEST_CASE("a missing data file named in a config names the config's line as well as the file", "[cli]") {
+    testing::TemporaryDirectory dir;
+    const auto config = dir.write("pmsm.toml", "name = \"p\"\ntrials = 1\nseed = 1\n[budget]\niterations = 5\n"
+                                               "[[optimizer]]\nname = \"random_search\"\n"
+                                               "[[problem]]\nname = \"pmsm_identification\"\ndata = \"absent.csv\"\n");
+    const auto out = run_cli("run " + config.string() + " --out " + (dir.path() / "out").string(), dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::Contains(config.string() + ":8: problem pmsm_identification(data=absent.csv): ") &&
+                              Catch::Contains("absent.csv: cannot open the measurement file: No such file or directory"));
+}

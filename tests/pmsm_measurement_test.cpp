@@ -112,6 +112,31 @@ TEST_CASE("the measurement reader refuses bad input, naming file, line and colum
         CHECK(e.line() == 1);
         CHECK(e.field() == "column 2");
     }
+    SECTION("semicolon-separated export with decimal commas: the separator is named") {
+        const auto e = refusal("i_d;i_q;u_d;u_q;omega_e\n0,1;0,2;0,3;0,4;16,7\n");
+        CHECK(e.line() == 1);
+        CHECK(e.field() == "i_d");
+        CHECK(e.message().find("separated by ';'") != std::string::npos);
+        CHECK(e.message().find("'.' as decimal point") != std::string::npos);
+    }
+    SECTION("decimal commas in a comma-separated file: the row has too many fields, and the hint says why") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n0,1,0,2,0,3,0,4,16,7\n");
+        CHECK(e.line() == 2);
+        CHECK(e.message() == "row has 10 fields but the header has 5 (a decimal comma? numbers must use '.' as the decimal mark)");
+    }
+    SECTION("binary input is named as such, never echoed raw") {
+        const char executable_start[] = "\x7f" "ELF\x02\x01\x01\0\0\0\n\x1b[2J";
+        const std::string binary(executable_start, sizeof executable_start - 1);
+        const auto e = refusal(binary);
+        CHECK(e.line() == 1);
+        CHECK(e.message() == "binary data (a NUL byte), not a CSV text file");
+        const auto escape = refusal("i_d,i_q,u_d,u_q,omega_e\n1,2,3,4,\x1b[2J\n");
+        CHECK(escape.line() == 2);
+        CHECK(escape.message() == "not a number: '\\x1B[2J'");
+        const auto header = refusal("\x1b]0;title\x07,i_q\n1,2\n");
+        CHECK(header.message().find('\x1b') == std::string::npos);
+        CHECK(header.message().find("\\x1B]0;title\\x07") != std::string::npos);
+    }
 }
 
 TEST_CASE("written measurements read back bit for bit", "[pmsm][measurement]") {

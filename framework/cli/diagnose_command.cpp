@@ -28,7 +28,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     cmd->add_option("--report", o->report, "write report.md with PNG plots into this directory");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
-        OptimizerRegistry::instance().at(o->optimizer, "optimizer");
+        check_optimizer_option(o->optimizer);
         auto data = pmsm::read_settled_measurement(o->data, o->settle);
         pmsm::DiagnosisOptions options;
         options.fit.optimizer = o->optimizer;

@@ -22,7 +22,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
     add_model_options(cmd, *o, "model, e.g. base+deadtime+delay(tau=150e-6) (docs/effects.md)", "write the fit as JSON here");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
-        OptimizerRegistry::instance().at(o->optimizer, "optimizer");
+        check_optimizer_option(o->optimizer);
         const auto data = pmsm::read_settled_measurement(o->data, o->settle);
         pmsm::FitOptions options;
         options.optimizer = o->optimizer;

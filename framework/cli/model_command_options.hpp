@@ -7,6 +7,8 @@
 #include <CLI/CLI.hpp>
 
 #include "framework/cli/option_ranges.hpp"
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
 
 namespace mhb::cli {
 
@@ -32,6 +34,16 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
     cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)")
         ->check(number_in(0.0, 1e6));
     cmd->add_option("--json", o.json, json_help);
+}
+
+// The --optimizer value as a registered optimizer's name; a typo is refused naming the option and
+// the closest name, before any data is read.
+inline void check_optimizer_option(const std::string& name) {
+    try {
+        OptimizerRegistry::instance().at(name, "optimizer");
+    } catch (const UnknownPlugin& e) {
+        throw InputError("command line", 0, "--optimizer", e.what());
+    }
 }
 
 }  // namespace mhb::cli
