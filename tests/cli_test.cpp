@@ -9,6 +9,7 @@
 #include "framework/results_store.hpp"
 #include "framework/statistics.hpp"
 #include "tests/mhbench_cli.hpp"
+#include "tests/table_comparison.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -23,27 +24,6 @@ Outcome run_cli(const std::string& args, const testing::TemporaryDirectory& dir)
     return {run.exit_code, run.output};
 }
 
-// table.csv without the run-time columns, which are the only ones allowed to differ between runs.
-std::string without_times(const std::string& csv) {
-    std::stringstream in(csv);
-    std::string line, out;
-    std::vector<bool> keep;
-    bool header = true;
-    while (std::getline(in, line)) {
-        std::vector<std::string> cells;
-        std::stringstream ls(line);
-        std::string cell;
-        while (std::getline(ls, cell, ',')) cells.push_back(cell);
-        if (header) {
-            for (const auto& c : cells) keep.push_back(c.find("time") == std::string::npos);
-            header = false;
-        }
-        for (std::size_t i = 0; i < cells.size(); ++i)
-            if (i < keep.size() && keep[i]) out += cells[i] + ",";
-        out += "\n";
-    }
-    return out;
-}
 }  // namespace
 
 TEST_CASE("a TOML experiment through the CLI gives identical, correct tables on 1 and 2 threads", "[cli]") {
@@ -54,7 +34,7 @@ TEST_CASE("a TOML experiment through the CLI gives identical, correct tables on 
     const auto csv1 = testing::read_file(dir.path() / "t1" / "table.csv");
     const auto csv2 = testing::read_file(dir.path() / "t2" / "table.csv");
     REQUIRE_FALSE(csv1.empty());
-    REQUIRE(without_times(csv1) == without_times(csv2));
+    REQUIRE(testing::without_times(csv1) == testing::without_times(csv2));
     REQUIRE(std::filesystem::exists(dir.path() / "t1" / "convergence_F1_dimension_5.png"));
     REQUIRE(std::filesystem::exists(dir.path() / "t1" / "boxplot_bbob_f1_dimension_3.svg"));
 
