@@ -1,5 +1,9 @@
 #include "framework/experiment_config.hpp"
 
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <limits>
 #include <set>
 
 #include <fmt/format.h>
@@ -31,8 +35,10 @@ public:
         fail(line_of(node), field, "expects a boolean, number or string");
     }
 
+    // An integer in [lo, hi]; `why_hi` says what the upper limit protects, for the message.
     std::int64_t integer(const toml::table& t, const char* key, const std::string& field, std::int64_t lo,
-                         std::int64_t fallback, long table_line, bool required) const {
+                         std::int64_t fallback, long table_line, bool required,
+                         std::int64_t hi = std::numeric_limits<std::int64_t>::max(), const char* why_hi = "") const {
         const toml::node* n = t.get(key);
         if (!n) {
             if (required) fail(table_line, field, "is required");
@@ -41,6 +47,7 @@ public:
         auto v = n->as_integer();
         if (!v) fail(line_of(*n), field, "expects an integer");
         if (v->get() < lo) fail(line_of(*n), field, fmt::format("must be >= {} (got {})", lo, v->get()));
+        if (v->get() > hi) fail(line_of(*n), field, fmt::format("must be <= {} (got {}){}", hi, v->get(), why_hi));
         return v->get();
     }
 
@@ -178,10 +185,17 @@ ExperimentSpec load_experiment(const fs::path& file) {
     ExperimentSpec spec;
     spec.file = file;
     ConfigReader reader(file);
-    if (!fs::exists(file)) reader.fail(0, "", "no such file");
+    std::error_code ec;
+    if (fs::is_directory(file, ec)) reader.fail(0, "", "is a directory; expected an experiment TOML file");
+    std::ifstream in(file, std::ios::binary);
+    if (!in) reader.fail(0, "", std::string("cannot open the experiment file: ") + std::strerror(errno));
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+        reader.fail(0, "", "empty file; an experiment needs trials, seed, [budget], [[optimizer]] and [[problem]] "
+                           "(docs/config-reference.md)");
     toml::table root;
     try {
-        root = toml::parse_file(file.string());
+        root = toml::parse(text, file.string());
     } catch (const toml::parse_error& e) {
         reader.fail(static_cast<long>(e.source().begin.line), "", std::string("TOML syntax: ") + std::string(e.description()));
     }
@@ -195,7 +209,8 @@ ExperimentSpec load_experiment(const fs::path& file) {
 
     spec.name = reader.text(root, "name", "name", 1, false, file.stem().string());
     spec.description = reader.text(root, "description", "description", 1, false);
-    spec.trials = reader.integer(root, "trials", "trials", 1, 0, 1, true);
+    spec.trials = reader.integer(root, "trials", "trials", 1, 0, 1, true, max_trials,
+                                 ": every trial is a line in results.jsonl and a row in memory for the tables");
     spec.seed = static_cast<std::uint64_t>(reader.integer(root, "seed", "seed", 0, 0, 1, true));
     const fs::path base = fs::absolute(file).parent_path();
     spec.output = base / reader.text(root, "output", "output", 1, false, "../results/" + spec.name);
@@ -213,8 +228,12 @@ ExperimentSpec load_experiment(const fs::path& file) {
     for (const auto& [k, v] : bt)
         if (k.str() != "iterations" && k.str() != "evaluations")
             reader.fail(line_of(v), "budget." + std::string(k.str()), "unknown key; expected iterations or evaluations");
-    spec.budget.max_iterations = reader.integer(bt, "iterations", "budget.iterations", 1, 0, line_of(*budget), false);
-    spec.budget.max_evaluations = reader.integer(bt, "evaluations", "budget.evaluations", 1, 0, line_of(*budget), false);
+    const char* trace_cost = ": each iteration adds an entry to the trial's convergence trace, held in memory and written "
+                             "to results.jsonl";
+    spec.budget.max_iterations =
+        reader.integer(bt, "iterations", "budget.iterations", 1, 0, line_of(*budget), false, max_budget_iterations, trace_cost);
+    spec.budget.max_evaluations = reader.integer(bt, "evaluations", "budget.evaluations", 1, 0, line_of(*budget), false,
+                                                 max_budget_evaluations, trace_cost);
     if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0)
         reader.fail(line_of(*budget), "budget", "set iterations, evaluations or both");
 

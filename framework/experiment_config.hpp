@@ -53,6 +53,11 @@ struct ExperimentSpec {
     std::vector<PublishedResult> published;
 };
 
+// Upper limits of what a config may ask for, checked before any trial runs (the messages give them).
+inline constexpr std::int64_t max_trials = 100'000;
+inline constexpr std::int64_t max_budget_iterations = 10'000'000;
+inline constexpr std::int64_t max_budget_evaluations = 1'000'000'000;
+
 // Throws InputError (file, line, field) for anything malformed, unknown or out of range.
 ExperimentSpec load_experiment(const std::filesystem::path& file);
 

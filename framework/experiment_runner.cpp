@@ -45,8 +45,10 @@ std::unique_ptr<Problem> instantiate(const PluginVariant& v, const ProblemContex
 std::unique_ptr<Problem> create_problem(const ExperimentSpec& spec, const PluginVariant& v, const ProblemContext& ctx) {
     try {
         return instantiate(v, ctx);
-    } catch (const InputError&) {
-        throw;
+    } catch (const InputError& e) {
+        if (e.file() == spec.file.string()) throw;
+        // A file the problem reads (its `data`): say which entry of the config named it.
+        throw InputError(spec.file.string(), v.line, "problem " + v.label, e.what());
     } catch (const std::invalid_argument& e) {
         throw InputError(spec.file.string(), v.bounds_line, v.label + " lower/upper", e.what());
     } catch (const std::exception& e) {
@@ -62,7 +64,93 @@ void drop_incomplete_last_line(const fs::path& path) {
     in.close();
     if (text.empty() || text.back() == '\n') return;
     const auto cut = text.find_last_of('\n');
-    fs::resize_file(path, cut == std::string::npos ? 0 : cut + 1);
+    std::error_code ec;
+    fs::resize_file(path, cut == std::string::npos ? 0 : cut + 1, ec);
+    if (ec) throw InputError(path.string(), 0, "", "cannot cut off the incomplete last record: " + ec.message());
+}
+
+// Moves an earlier run's results.jsonl and experiment.json into previous/N (the first free N), so
+// that no rerun ever overwrites a run before it. Returns the directory they went to.
+fs::path keep_previous_run(const fs::path& output) {
+    const fs::path kept_root = output / "previous";
+    std::error_code ec;
+    fs::create_directories(kept_root, ec);
+    if (ec) throw InputError(kept_root.string(), 0, "output", "cannot create the directory for earlier runs: " + ec.message());
+    fs::path kept;
+    // create_directory fails on an existing directory, so two runs started at once never share one.
+    for (int n = 1;; ++n) {
+        kept = kept_root / std::to_string(n);
+        if (fs::create_directory(kept, ec)) break;
+        if (ec) throw InputError(kept.string(), 0, "output", "cannot create the directory for the earlier run: " + ec.message());
+    }
+    for (const char* name : {"results.jsonl", "experiment.json"}) {
+        if (!fs::exists(output / name, ec)) continue;
+        fs::rename(output / name, kept / name, ec);
+        if (ec) throw InputError((output / name).string(), 0, "output", "cannot move the earlier run aside: " + ec.message());
+    }
+    return kept;
+}
+
+std::string settings_text(const std::map<std::string, ParameterValue>& values) {
+    std::string out;
+    for (const auto& [k, v] : values) out += (out.empty() ? "" : ", ") + k + " = " + to_string(v);
+    return out.empty() ? "defaults" : out;
+}
+
+// A variant's settings with the defaults filled in, so that writing a default out or leaving it
+// away counts as the same setting.
+template <class RegistryT>
+std::map<std::string, ParameterValue> resolved(const RegistryT& registry, const std::string& name,
+                                               const std::map<std::string, ParameterValue>& given) {
+    const auto* entry = registry.find(name);
+    if (!entry) return given;
+    try {
+        return ParameterSet(entry->parameters, given).values();
+    } catch (const ParameterError&) {  // a parameter that no longer exists: compare as written
+        return given;
+    }
+}
+
+// Refuses to resume when a setting that shapes a trial differs from the run being resumed: the
+// records of both would otherwise end up in one table under one label.
+void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous, const fs::path& output) {
+    auto refuse = [&](long line, const std::string& field, const std::string& difference) {
+        throw InputError(spec.file.string(), line, field,
+                         difference + " in the run being resumed in " + output.string() +
+                             "; resuming would mix two experiments (drop --resume to keep that run and start anew, "
+                             "or use another --out)");
+    };
+    if (previous.seed != spec.seed)
+        refuse(0, "seed", fmt::format("is {} here but was {}", spec.seed, previous.seed));
+    if (previous.budget.max_iterations != spec.budget.max_iterations)
+        refuse(0, "budget.iterations", fmt::format("is {} here but was {}", spec.budget.max_iterations, previous.budget.max_iterations));
+    if (previous.budget.max_evaluations != spec.budget.max_evaluations)
+        refuse(0, "budget.evaluations",
+               fmt::format("is {} here but was {}", spec.budget.max_evaluations, previous.budget.max_evaluations));
+    for (const auto& v : spec.optimizers)
+        for (const auto& p : previous.optimizers) {
+            if (p.label != v.label) continue;
+            const auto& registry = OptimizerRegistry::instance();
+            const auto now = resolved(registry, v.name, v.values), then = resolved(registry, p.name, p.values);
+            if (p.name != v.name || now != then)
+                refuse(v.line, "optimizer " + v.label,
+                       fmt::format("is {} ({}) here but was {} ({})", v.name, settings_text(now), p.name, settings_text(then)));
+        }
+    for (const auto& v : spec.problems)
+        for (const auto& p : previous.problems) {
+            if (p.label != v.label) continue;
+            if (!p.settings_recorded)
+                refuse(v.line, "problem " + v.label, "cannot be compared: its settings are not recorded");
+            const auto& registry = ProblemRegistry::instance();
+            const auto now = resolved(registry, v.name, v.values), then = resolved(registry, p.name, p.parameters);
+            if (p.name != v.name || now != then)
+                refuse(v.line, "problem " + v.label,
+                       fmt::format("is {} ({}) here but was {} ({})", v.name, settings_text(now), p.name, settings_text(then)));
+            if (p.lower != v.lower || p.upper != v.upper)
+                refuse(v.bounds_line, "problem " + v.label + " lower/upper",
+                       fmt::format("the box is [{}] .. [{}] here but was [{}] .. [{}]", fmt::join(v.lower, ", "),
+                                   fmt::join(v.upper, ", "), fmt::join(p.lower, ", "), fmt::join(p.upper, ", ")));
+        }
 }
 
 }  // namespace
@@ -90,6 +178,9 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec) {
         p.named_parameters = problem->has_named_parameters();
         p.truth = problem->truth();
         p.description = problem->describe();
+        p.parameters = v.values;
+        p.lower = v.lower;
+        p.upper = v.upper;
         info.problems.push_back(std::move(p));
     }
     for (const auto& pub : spec.published)
@@ -124,26 +215,21 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
                                                                    (ec ? ec.message() : std::string("not a directory")));
 
     std::set<std::tuple<std::string, std::string, std::int64_t>> done;
-    if (fs::exists(results_path) && fs::file_size(results_path) > 0) {
+    const bool earlier_results = fs::file_size(results_path, ec) > 0 && !ec;
+    const bool earlier_info = fs::exists(summary.output / "experiment.json", ec);
+    if (earlier_results || earlier_info) {
         if (options.resume) {
-            if (fs::exists(summary.output / "experiment.json")) {
-                const auto previous = read_experiment_info(summary.output);
-                if (previous.seed != spec.seed || previous.budget.max_iterations != spec.budget.max_iterations ||
-                    previous.budget.max_evaluations != spec.budget.max_evaluations)
-                    throw InputError(spec.file.string(), 0, "seed/budget",
-                                     "differs from the run being resumed in " + summary.output.string() +
-                                         "; resuming would mix two experiments (use another --out)");
+            if (earlier_info) check_resumable(spec, read_experiment_info(summary.output), summary.output);
+            if (earlier_results) {
+                drop_incomplete_last_line(results_path);
+                auto loaded = read_results(results_path);
+                summary.notes = loaded.notes;
+                for (const auto& r : loaded.records) done.emplace(r.optimizer, r.problem, r.trial);
             }
-            drop_incomplete_last_line(results_path);
-            auto loaded = read_results(results_path);
-            summary.notes = loaded.notes;
-            for (const auto& r : loaded.records) done.emplace(r.optimizer, r.problem, r.trial);
-        } else {
-            // Never destroy finished results: keep the previous run beside the new one.
-            fs::path kept = summary.output / "results.previous.jsonl";
-            fs::rename(results_path, kept, ec);
-            if (ec) throw InputError(results_path.string(), 0, "output", "cannot move the previous results aside: " + ec.message());
-            summary.notes.push_back("previous results kept as " + kept.string() + " (use --resume to continue a run)");
+        } else if (earlier_results) {
+            const fs::path kept = keep_previous_run(summary.output);
+            summary.notes.push_back("the earlier run's results and experiment.json are kept in " + kept.string() +
+                                    " (use --resume to continue a run instead)");
         }
     }
     write_experiment_info(summary.output, summary.info);
@@ -169,10 +255,13 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
     std::atomic<std::size_t> failed{0};
     std::mutex failures_mutex;
     std::exception_ptr write_error;
+    // After a failed write (a full disk) the remaining trials are skipped: their records could not be kept.
+    std::atomic<bool> writes_failed{false};
     const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(std::size_t{0}, tasks.size(), [&](std::size_t k) {
+            if (writes_failed) return;
             const Task& task = tasks[k];
             const auto& ov = spec.optimizers[task.optimizer];
             const auto& pv = spec.problems[task.problem];
@@ -200,6 +289,7 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
             try {
                 writer.append(record);
             } catch (...) {
+                writes_failed = true;
                 std::lock_guard lock(failures_mutex);
                 if (!write_error) write_error = std::current_exception();
             }

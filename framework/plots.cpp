@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "framework/input_error.hpp"
 #include "framework/process.hpp"
 #include "framework/report_tables.hpp"
 #include "framework/statistics.hpp"
@@ -134,7 +135,9 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
     PlotOutcome outcome;
     const auto groups = group_trials(info, records);
     const fs::path data_dir = directory / "plot-data";
-    fs::create_directories(data_dir);
+    std::error_code ec;
+    fs::create_directories(data_dir, ec);
+    if (ec) throw InputError(data_dir.string(), 0, "", "cannot create the directory for the plot data: " + ec.message());
     auto render = [&](const fs::path& base, const std::string& body, int w, int h) {
         std::string error;
         if (render_gnuplot(base, body, w, h, error)) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "framework/optimizer.hpp"
+#include "framework/closest_name.hpp"
 #include "framework/parameters.hpp"
 #include "framework/problem.hpp"
 
@@ -67,9 +68,9 @@ public:
 
     const Entry& at(const std::string& name, const std::string& kind) const {
         if (const Entry* e = find(name)) return *e;
-        std::string known;
-        for (const auto& [key, e] : entries_) known += (known.empty() ? "" : ", ") + e.name;
-        throw UnknownPlugin("unknown " + kind + " '" + name + "'; registered: " + known);
+        std::vector<std::string> known;
+        for (const Entry* e : entries()) known.push_back(e->name);
+        throw UnknownPlugin(unknown_name_message(kind, name, known));
     }
 
     // All entries, sorted by name (natural order, so F2 comes before F10).

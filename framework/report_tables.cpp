@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/statistics.hpp"
 
@@ -356,9 +357,7 @@ std::string write_tables(const std::filesystem::path& directory, const Experimen
     std::string markdown = markdown_report(info, records);
     for (const auto& [name, text] : {std::pair{"table.md", markdown},
                                      std::pair{"table.csv", csv_table(info, records)}}) {
-        std::ofstream out(directory / name);
-        out << text;
-        if (!out) throw InputError((directory / name).string(), 0, "output", "cannot write the table");
+        replace_file(directory / name, text);
     }
     return markdown;
 }

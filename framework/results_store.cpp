@@ -1,9 +1,12 @@
 #include "framework/results_store.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 
 #include <fmt/format.h>
 
+#include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 
 namespace mhb {
@@ -43,16 +46,24 @@ ParameterValue value_from(const json& j) {
     if (j.is_number()) return j.get<double>();
     return j.get<std::string>();
 }
-json variant_json(const PluginVariant& v) {
+json parameters_json(const std::map<std::string, ParameterValue>& values) {
     json params = json::object();
-    for (const auto& [k, x] : v.values) params[k] = value_json(x);
-    return {{"label", v.label}, {"name", v.name}, {"parameters", params}};
+    for (const auto& [k, x] : values) params[k] = value_json(x);
+    return params;
+}
+std::map<std::string, ParameterValue> parameters_from(const json& j) {
+    std::map<std::string, ParameterValue> values;
+    for (const auto& [k, x] : j.items()) values[k] = value_from(x);
+    return values;
+}
+json variant_json(const PluginVariant& v) {
+    return {{"label", v.label}, {"name", v.name}, {"parameters", parameters_json(v.values)}};
 }
 PluginVariant variant_from(const json& j) {
     PluginVariant v;
     v.label = j.at("label");
     v.name = j.at("name");
-    for (const auto& [k, x] : j.at("parameters").items()) v.values[k] = value_from(x);
+    v.values = parameters_from(j.at("parameters"));
     return v;
 }
 template <class T>
@@ -150,7 +161,10 @@ json to_json(const ExperimentInfo& info) {
                             {"true_parameters", optional_json(p.truth.true_parameters)},
                             {"reference_solution", optional_json(p.truth.reference_solution)},
                             {"reference_fitness", optional_json(p.truth.reference_fitness)},
-                            {"reference_label", p.truth.reference_label}});
+                            {"reference_label", p.truth.reference_label},
+                            {"parameters", parameters_json(p.parameters)},
+                            {"lower", p.lower},
+                            {"upper", p.upper}});
     }
     return {{"name", info.name},
             {"description", info.description},
@@ -189,6 +203,12 @@ ExperimentInfo experiment_from_json(const json& j) {
         if (!p.at("reference_solution").is_null()) pi.truth.reference_solution = vector_from(p["reference_solution"]);
         if (!p.at("reference_fitness").is_null()) pi.truth.reference_fitness = number_from(p["reference_fitness"]);
         pi.truth.reference_label = p.value("reference_label", "");
+        pi.settings_recorded = p.contains("parameters");
+        if (pi.settings_recorded) {
+            pi.parameters = parameters_from(p["parameters"]);
+            pi.lower = p.value("lower", std::vector<double>{});
+            pi.upper = p.value("upper", std::vector<double>{});
+        }
         info.problems.push_back(std::move(pi));
     }
     info.baseline = j.at("baseline");
@@ -211,15 +231,25 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& path) : path_(path) {
 void ResultsWriter::append(const TrialRecord& record) {
     const std::string line = to_json(record).dump() + "\n";
     std::lock_guard lock(mutex_);
+    if (!out_) throw InputError(path_.string(), 0, "", "an earlier write to this file failed");
+    errno = 0;
     out_ << line;
     out_.flush();
-    if (!out_) throw std::runtime_error("writing " + path_.string() + " failed (disk full?)");
+    if (!out_)
+        throw InputError(path_.string(), 0, "",
+                         fmt::format("writing a trial record failed ({}); the records before it are kept: make room, "
+                                     "then run again with --resume", errno ? std::strerror(errno) : "disk full?"));
 }
 
 LoadedResults read_results(const std::filesystem::path& path) {
     LoadedResults out;
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
+        if (ec) throw InputError(path.string(), 0, "", "cannot read the results: " + ec.message());
+        return out;
+    }
     std::ifstream in(path);
-    if (!in) return out;
+    if (!in) throw InputError(path.string(), 0, "", std::string("cannot read the results: ") + std::strerror(errno));
     std::string line;
     long number = 0;
     std::vector<std::pair<long, std::string>> lines;
@@ -254,10 +284,7 @@ ExperimentInfo read_experiment_info(const std::filesystem::path& directory) {
 }
 
 void write_experiment_info(const std::filesystem::path& directory, const ExperimentInfo& info) {
-    const auto path = directory / "experiment.json";
-    std::ofstream out(path);
-    out << to_json(info).dump(2) << "\n";
-    if (!out) throw InputError(directory.string(), 0, "output", "cannot write experiment.json here");
+    replace_file(directory / "experiment.json", to_json(info).dump(2) + "\n");
 }
 
 }  // namespace mhb

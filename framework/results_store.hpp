@@ -26,6 +26,12 @@ struct ProblemInfo {
     bool named_parameters = false;
     KnownTruth truth;
     std::string description;
+    // The settings as the config gave them (the variant's values and box), so that `--resume` can
+    // refuse to mix trials of two settings under one label. Empty in files from before they were
+    // recorded: `settings_recorded` tells the two apart.
+    std::map<std::string, ParameterValue> parameters;
+    std::vector<double> lower, upper;
+    bool settings_recorded = true;
 };
 
 struct ExperimentInfo {
@@ -52,7 +58,10 @@ class ResultsWriter {
 public:
     // Opens `path` for appending; InputError when the directory is not writable.
     explicit ResultsWriter(const std::filesystem::path& path);
-    void append(const TrialRecord& record);  // thread-safe; flushed before it returns
+    // Thread-safe; flushed before it returns. A failed write (a full disk) is an InputError naming the
+    // file; the records written before it stay readable (at worst the last line is cut short, which
+    // read_results reports and `--resume` reruns).
+    void append(const TrialRecord& record);
 
 private:
     std::filesystem::path path_;
@@ -68,6 +77,7 @@ struct LoadedResults {
 LoadedResults read_results(const std::filesystem::path& path);
 
 ExperimentInfo read_experiment_info(const std::filesystem::path& directory);
+// Replaces experiment.json whole (temporary file and rename): a kill never leaves it half written.
 void write_experiment_info(const std::filesystem::path& directory, const ExperimentInfo& info);
 
 }  // namespace mhb

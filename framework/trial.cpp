@@ -1,5 +1,6 @@
 #include "framework/trial.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 
@@ -19,7 +20,11 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
         rec.trace_best.push_back(evaluator.best_fitness());
         if (setup.record_positions) rec.trace_position.push_back(evaluator.best_position());
     };
-    const auto reserve = static_cast<std::size_t>(setup.budget.max_iterations > 0 ? setup.budget.max_iterations + 1 : 256);
+    // Only a first guess at the trace's length: an iteration budget can be far more than the trial
+    // reaches (it may stop on evaluations first), and max_iterations + 1 overflows at the int64 maximum.
+    constexpr std::int64_t reserve_cap = 4096;
+    const auto reserve = static_cast<std::size_t>(
+        setup.budget.max_iterations > 0 ? std::min(setup.budget.max_iterations, reserve_cap - 1) + 1 : 256);
     rec.trace_evaluations.reserve(reserve);
     rec.trace_best.reserve(reserve);
 

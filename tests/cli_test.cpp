@@ -9,6 +9,7 @@
 #include "framework/results_store.hpp"
 #include "framework/statistics.hpp"
 #include "tests/mhbench_cli.hpp"
+#include "tests/table_comparison.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -23,27 +24,6 @@ Outcome run_cli(const std::string& args, const testing::TemporaryDirectory& dir)
     return {run.exit_code, run.output};
 }
 
-// table.csv without the run-time columns, which are the only ones allowed to differ between runs.
-std::string without_times(const std::string& csv) {
-    std::stringstream in(csv);
-    std::string line, out;
-    std::vector<bool> keep;
-    bool header = true;
-    while (std::getline(in, line)) {
-        std::vector<std::string> cells;
-        std::stringstream ls(line);
-        std::string cell;
-        while (std::getline(ls, cell, ',')) cells.push_back(cell);
-        if (header) {
-            for (const auto& c : cells) keep.push_back(c.find("time") == std::string::npos);
-            header = false;
-        }
-        for (std::size_t i = 0; i < cells.size(); ++i)
-            if (i < keep.size() && keep[i]) out += cells[i] + ",";
-        out += "\n";
-    }
-    return out;
-}
 }  // namespace
 
 TEST_CASE("a TOML experiment through the CLI gives identical, correct tables on 1 and 2 threads", "[cli]") {
@@ -54,7 +34,7 @@ TEST_CASE("a TOML experiment through the CLI gives identical, correct tables on 
     const auto csv1 = testing::read_file(dir.path() / "t1" / "table.csv");
     const auto csv2 = testing::read_file(dir.path() / "t2" / "table.csv");
     REQUIRE_FALSE(csv1.empty());
-    REQUIRE(without_times(csv1) == without_times(csv2));
+    REQUIRE(testing::without_times(csv1) == testing::without_times(csv2));
     REQUIRE(std::filesystem::exists(dir.path() / "t1" / "convergence_F1_dimension_5.png"));
     REQUIRE(std::filesystem::exists(dir.path() / "t1" / "boxplot_bbob_f1_dimension_3.svg"));
 
@@ -82,7 +62,7 @@ TEST_CASE("bad input through the CLI: one message naming file and line, exit cod
     REQUIRE_THAT(out.err, Catch::Contains("bad.toml:8: optimizer[0].batch: must lie in [1, 1000000] (got -3)"));
     out = run_cli("run " + (dir.path() / "missing.toml").string(), dir);
     REQUIRE(out.code == 2);
-    REQUIRE_THAT(out.err, Catch::Contains("missing.toml: no such file"));
+    REQUIRE_THAT(out.err, Catch::Contains("missing.toml: cannot open the experiment file: No such file"));
     out = run_cli("run", dir);
     REQUIRE(out.code == 2);
     out = run_cli("run " + bad.string() + " --threads 0", dir);
@@ -101,4 +81,28 @@ TEST_CASE("`mhbench list` shows every registered plugin with its parameters", "[
     const auto out = testing::read_file(dir.path() / "stdout.txt");
     REQUIRE_THAT(out, Catch::Contains("random_search") && Catch::Contains("batch") && Catch::Contains("bbob_f24") &&
                           Catch::Contains("F23"));
+}
+
+TEST_CASE("unknown names on the command line name the option and suggest the closest name", "[cli]") {
+    testing::TemporaryDirectory dir;
+    auto out = run_cli("fitt --data x.csv", dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::StartsWith("error: command line: unknown command 'fitt'; did you mean 'fit'?") &&
+                              Catch::Contains("\n  diagnose\n"));
+    const auto data = dir.write("d.csv", "i_d,i_q,u_d,u_q,omega_e\n0,0.1,0,1,10\n0,0.2,0,2,20\n");
+    out = run_cli("fit --data " + data.string() + " --optimizer cmaez", dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::StartsWith("error: command line: --optimizer: unknown optimizer 'cmaez'; did you mean 'cmaes'?") &&
+                              Catch::Contains("\n  gwo\n"));
+}
+
+TEST_CASE("a missing data file named in a config names the config's line as well as the file", "[cli]") {
+    testing::TemporaryDirectory dir;
+    const auto config = dir.write("pmsm.toml", "name = \"p\"\ntrials = 1\nseed = 1\n[budget]\niterations = 5\n"
+                                               "[[optimizer]]\nname = \"random_search\"\n"
+                                               "[[problem]]\nname = \"pmsm_identification\"\ndata = \"absent.csv\"\n");
+    const auto out = run_cli("run " + config.string() + " --out " + (dir.path() / "out").string(), dir);
+    REQUIRE(out.code == 2);
+    REQUIRE_THAT(out.err, Catch::Contains(config.string() + ":8: problem pmsm_identification(data=absent.csv): ") &&
+                              Catch::Contains("absent.csv: cannot open the measurement file: No such file or directory"));
 }

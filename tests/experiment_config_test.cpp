@@ -92,6 +92,32 @@ TEST_CASE("bad experiments are refused with file, line and field", "[experiment_
     REQUIRE(error_of(valid).empty());
 }
 
+TEST_CASE("sizes a config asks for are checked against their stated limits before a trial runs", "[experiment_config]") {
+    CHECK_THAT(error_of(replace(valid, "iterations = 10", "iterations = 9223372036854775807")),
+               Catch::Contains("exp.toml:6: budget.iterations: must be <= " + std::to_string(max_budget_iterations)));
+    CHECK_THAT(error_of(replace(valid, "iterations = 10", "evaluations = 99999999999")),
+               Catch::Contains("exp.toml:6: budget.evaluations: must be <= " + std::to_string(max_budget_evaluations)));
+    CHECK_THAT(error_of(replace(valid, "trials = 3", "trials = 100000000")),
+               Catch::Contains("exp.toml:2: trials: must be <= " + std::to_string(max_trials)));
+    CHECK(error_of(replace(valid, "iterations = 10", "iterations = " + std::to_string(max_budget_iterations))).empty());
+}
+
+TEST_CASE("a directory or an empty file given as the config says so", "[experiment_config]") {
+    testing::TemporaryDirectory dir;
+    auto message = [](const std::filesystem::path& file) -> std::string {
+        try {
+            load_experiment(file);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    CHECK_THAT(message(dir.path()), Catch::Contains(dir.path().string() + ": is a directory"));
+    CHECK_THAT(message(dir.write("empty.toml", "")), Catch::Contains("empty.toml: empty file"));
+    CHECK_THAT(message(dir.write("blank.toml", "\n  \n")), Catch::Contains("blank.toml: empty file"));
+    CHECK_THAT(message(dir.path() / "absent.toml"), Catch::Contains("absent.toml: cannot open the experiment file: No such file"));
+}
+
 TEST_CASE("grid expansion is the cartesian product in declaration order", "[experiment_config]") {
     const auto grid = expand_grid({{"a", {std::int64_t{1}, std::int64_t{2}}}, {"b", {true, false}}, {"c", {0.5}}});
     REQUIRE(grid.size() == 4);

@@ -4,6 +4,7 @@
 
 #include "framework/experiment_runner.hpp"
 #include "framework/input_error.hpp"
+#include "framework/registry.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -82,16 +83,26 @@ TEST_CASE("an interrupted run resumes without losing or repeating trials", "[exp
     require_same_results(complete, reference);
 }
 
-TEST_CASE("a new run keeps the previous results aside instead of deleting them", "[experiment_runner]") {
+TEST_CASE("every earlier run in the directory is kept, with its experiment.json, under its own name", "[experiment_runner]") {
     testing::TemporaryDirectory dir;
-    const auto spec = load_experiment(dir.write("e.toml", config(two_optimizers, two_problems, 2)));
     RunOptions o;
     o.output = dir.path() / "out";
-    run_experiment(spec, o);
-    const auto first = testing::read_file(dir.path() / "out" / "results.jsonl");
-    const auto s = run_experiment(spec, o);
-    REQUIRE(testing::read_file(dir.path() / "out" / "results.previous.jsonl") == first);
-    REQUIRE(s.notes.size() == 1);
+    // Three runs of different sizes: each kept file must hold its own run's records.
+    std::vector<std::string> results, infos;
+    for (int trials : {1, 2, 3}) {
+        const auto spec = load_experiment(dir.write("e.toml", config(two_optimizers, two_problems, trials)));
+        const auto s = run_experiment(spec, o);
+        REQUIRE(s.notes.size() == (trials == 1 ? 0u : 1u));
+        results.push_back(testing::read_file(dir.path() / "out" / "results.jsonl"));
+        infos.push_back(testing::read_file(dir.path() / "out" / "experiment.json"));
+    }
+    for (std::size_t n = 1; n <= 2; ++n) {
+        const auto kept = dir.path() / "out" / "previous" / std::to_string(n);
+        REQUIRE(testing::read_file(kept / "results.jsonl") == results[n - 1]);
+        REQUIRE(testing::read_file(kept / "experiment.json") == infos[n - 1]);
+        REQUIRE(read_results(kept / "results.jsonl").records.size() == 4 * n);
+    }
+    REQUIRE(read_results(dir.path() / "out" / "results.jsonl").records.size() == 12);
 }
 
 TEST_CASE("a plugin that throws or returns NaN fails only its own trials", "[experiment_runner]") {
@@ -130,4 +141,73 @@ TEST_CASE("an output directory that cannot be written is bad input", "[experimen
     RunOptions o;
     o.output = dir.path() / "blocker" / "sub";
     REQUIRE_THROWS_AS(run_experiment(spec, o), InputError);
+}
+
+TEST_CASE("resuming is refused, naming the difference, when an optimizer, problem or budget setting changed", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const std::string optimizer = "[[optimizer]]\nname = \"random_search\"\nlabel = \"RS\"\n";
+    const std::string problem = "[[problem]]\nname = \"test_sphere\"\nlabel = \"P\"\ndimension = 2\n";
+    RunOptions o;
+    o.output = dir.path() / "out";
+    run_experiment(load_experiment(dir.write("e.toml", config(optimizer + "batch = 4\n", problem, 2))), o);
+    const auto before = testing::read_file(dir.path() / "out" / "results.jsonl");
+    o.resume = true;
+    auto refused = [&](const std::string& text) -> std::string {
+        const auto spec = load_experiment(dir.write("e.toml", text));
+        try {
+            run_experiment(spec, o);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "accepted";
+    };
+    const auto optimizer_changed = refused(config(optimizer + "batch = 8\n", problem, 2));
+    CHECK_THAT(optimizer_changed, Catch::Contains("optimizer RS") && Catch::Contains("batch = 8") &&
+                                      Catch::Contains("batch = 4") && Catch::Contains("e.toml:6"));
+    const auto problem_changed = refused(config(optimizer + "batch = 4\n", "[[problem]]\nname = \"test_sphere\"\nlabel = \"P\"\ndimension = 3\n", 2));
+    CHECK_THAT(problem_changed, Catch::Contains("problem P") && Catch::Contains("dimension = 3") && Catch::Contains("dimension = 2"));
+    const auto box_changed = refused(config(optimizer + "batch = 4\n", problem + "lower = -1\n", 2));
+    CHECK_THAT(box_changed, Catch::Contains("lower/upper"));
+    std::string budget = config(optimizer + "batch = 4\n", problem, 2);
+    budget.replace(budget.find("iterations = 15"), 15, "iterations = 16");
+    CHECK_THAT(refused(budget), Catch::Contains("budget.iterations") && Catch::Contains("16") && Catch::Contains("15"));
+    // Nothing was touched by the refusals.
+    REQUIRE(testing::read_file(dir.path() / "out" / "results.jsonl") == before);
+
+    // More trials with the same settings is a continuation, not a different experiment.
+    const auto s = run_experiment(load_experiment(dir.write("e.toml", config(optimizer + "batch = 4\n", problem, 3))), o);
+    REQUIRE(s.skipped == 2);
+    REQUIRE(s.ran == 1);
+}
+
+TEST_CASE("resuming accepts a default written out that the earlier run left away", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const std::string problem = "[[problem]]\nname = \"test_sphere\"\nlabel = \"P\"\ndimension = 2\n";
+    RunOptions o;
+    o.output = dir.path() / "out";
+    run_experiment(load_experiment(dir.write("e.toml", config("[[optimizer]]\nname = \"random_search\"\nlabel = \"RS\"\n", problem, 2))), o);
+    o.resume = true;
+    const auto& defaults = OptimizerRegistry::instance().at("random_search", "optimizer").parameters;
+    const std::string batch = to_string(defaults.front().default_value);
+    const auto s = run_experiment(
+        load_experiment(dir.write("e.toml", config("[[optimizer]]\nname = \"random_search\"\nlabel = \"RS\"\n" +
+                                                       defaults.front().name + " = " + batch + "\n", problem, 2))), o);
+    REQUIRE(s.skipped == 2);
+}
+
+TEST_CASE("a full disk stops the run with a message naming the results file", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const auto spec = load_experiment(dir.write("e.toml", config(two_optimizers, two_problems, 2)));
+    std::filesystem::create_directories(dir.path() / "out");
+    // /dev/full accepts the open and fails every write with ENOSPC, as a full disk does.
+    std::filesystem::create_symlink("/dev/full", dir.path() / "out" / "results.jsonl");
+    RunOptions o;
+    o.output = dir.path() / "out";
+    try {
+        run_experiment(spec, o);
+        FAIL("a failed write went unnoticed");
+    } catch (const InputError& e) {
+        CHECK_THAT(e.what(), Catch::Contains("results.jsonl") && Catch::Contains("No space left on device") &&
+                                 Catch::Contains("--resume"));
+    }
 }

@@ -10,6 +10,7 @@
 #include "problems/pmsm/flux_map.hpp"
 #include "problems/pmsm/linear_fit.hpp"
 #include "tests/pmsm_fixture.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;
@@ -100,7 +101,8 @@ TEST_CASE("the flux map reproduces its grid, interpolates bilinearly and inverts
 }
 
 TEST_CASE("a malformed flux map is refused with its line", "[pmsm][flux_map]") {
-    const auto path = std::filesystem::temp_directory_path() / "mhbench_bad_fluxmap.csv";
+    const mhb::testing::TemporaryDirectory dir;
+    const auto path = dir.path() / "bad_fluxmap.csv";
     auto refusal = [&](const std::string& text) {
         std::ofstream(path) << text;
         try {
@@ -120,7 +122,6 @@ TEST_CASE("a malformed flux map is refused with its line", "[pmsm][flux_map]") {
     CHECK(e.message().find("complete rectangular grid") != std::string::npos);
     e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,0,0.4,0.1\n");
     CHECK(e.line() == 3);
-    std::filesystem::remove(path);
 }
 
 TEST_CASE("the flux-map plant settles where the measured map says", "[pmsm][flux_map]") {

@@ -11,6 +11,7 @@
 #include "problems/pmsm/base_model_fit.hpp"
 #include "problems/pmsm/simulation_profile.hpp"
 #include "tests/pmsm_fixture.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;
@@ -18,12 +19,10 @@ using namespace mhb::pmsm::testing;
 
 namespace {
 
-const std::filesystem::path work = std::filesystem::temp_directory_path() / "mhbench_pmsm_identification";
 const std::filesystem::path experiments = std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm";
 
 // Simulates `spec` into work/<name>.csv with its sidecar and returns the CSV path.
-std::filesystem::path simulated_file(const std::string& name, const DriveSimulation& spec) {
-    std::filesystem::create_directories(work);
+std::filesystem::path simulated_file(const std::filesystem::path& work, const std::string& name, const DriveSimulation& spec) {
     const auto path = work / (name + ".csv");
     write_simulation(path, spec, simulate(spec), name);
     return path;
@@ -48,7 +47,9 @@ double direct_fitness(const Measurement& m, const Eigen::Vector4d& theta, double
 }  // namespace
 
 TEST_CASE("on noise-free ideal data the least-squares optimum is the truth", "[pmsm][identification]") {
-    const auto path = simulated_file("quiet_paper", quiet_paper_drive());
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
+    const auto path = simulated_file(work, "quiet_paper", quiet_paper_drive());
     for (const std::string fitness : {"mse", "noise_weighted"}) {
         INFO("fitness " << fitness);
         const auto problem = make_problem("pmsm_identification", {{"data", path.string()}, {"fitness", fitness}});
@@ -70,12 +71,14 @@ TEST_CASE("on noise-free ideal data the least-squares optimum is the truth", "[p
 }
 
 TEST_CASE("the batch evaluation equals the direct sum over samples", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
     auto spec = quiet_paper_drive();
     spec.noise.current = 1e-3;
     spec.noise.speed = 0.02;
     spec.noise.voltage = 5e-3;
     spec.seed = 5;
-    const auto path = simulated_file("noisy_paper", spec);
+    const auto path = simulated_file(work, "noisy_paper", spec);
     const Measurement data = read_measurement(path);
     const auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
 
@@ -109,6 +112,8 @@ TEST_CASE("the batch evaluation equals the direct sum over samples", "[pmsm][ide
 }
 
 TEST_CASE("the noise-weighted fitness divides each axis by its residual variance", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
     auto spec = quiet_paper_drive();
     spec.noise.voltage = 0.002;  // logged-voltage noise dominates on d ...
     spec.noise.current = 1e-4;
@@ -117,7 +122,6 @@ TEST_CASE("the noise-weighted fitness divides each axis by its residual variance
     // ... and an extra, larger error on q makes the axes differ.
     Rng rng(2);
     for (Eigen::Index k = 0; k < result.data.size(); ++k) result.data.u_q[k] += 0.1 * rng.normal();
-    std::filesystem::create_directories(work);
     const auto path = work / "weighted.csv";
     write_measurement(path, result.data);
     const auto problem = make_problem("pmsm_identification", {{"data", path.string()}, {"fitness", std::string("noise_weighted")}});
@@ -145,10 +149,12 @@ TEST_CASE("the noise-weighted fitness divides each axis by its residual variance
 }
 
 TEST_CASE("settle drops the samples right after each segment start", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
     auto spec = quiet_paper_drive();
     spec.segments[1].settle = 0.0;  // log the i_d step itself
     spec.segments[1].samples = 400;
-    const auto path = simulated_file("unsettled", spec);
+    const auto path = simulated_file(work, "unsettled", spec);
     const auto all = make_problem("pmsm_identification", {{"data", path.string()}});
     const auto settled = make_problem("pmsm_identification", {{"data", path.string()}, {"settle", 0.1}});
     // The current step leaves L di/dt in the first milliseconds, which the model lacks, and a small
@@ -162,6 +168,8 @@ TEST_CASE("settle drops the samples right after each segment start", "[pmsm][ide
 }
 
 TEST_CASE("the reference stays inside Table 2's box and says which bound holds it", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
     // Data whose unconstrained fit has a negative Lq: u_d = +omega Lq i_q instead of minus.
     Measurement m;
     const Eigen::Index n = 400;
@@ -174,7 +182,6 @@ TEST_CASE("the reference stays inside Table 2's box and says which bound holds i
         m.u_d[k] = 46.0 * m.i_d[k] + 16.76 * 0.02 * m.i_q[k];
         m.u_q[k] = 46.0 * m.i_q[k] + 16.76 * 0.02 * m.i_d[k] + 16.76 * 0.044 + 1e-3 * std::cos(0.37 * k);
     }
-    std::filesystem::create_directories(work);
     const auto path = work / "negative_lq.csv";
     write_measurement(path, m);
     const auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
@@ -195,12 +202,14 @@ TEST_CASE("the reference stays inside Table 2's box and says which bound holds i
 }
 
 TEST_CASE("pmsm_identification refuses what it cannot fit", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
     CHECK_THROWS_AS(make_problem("pmsm_identification"), ParameterError);
     CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", std::string("no_such_file.csv")}}, {work, 0}), InputError);
     CHECK_THROWS_AS(make_problem("pmsm_identification", {{"fitness", std::string("mae")}, {"data", std::string("x.csv")}}),
                     ParameterError);
     // Relative paths resolve against the context's base directory.
-    const auto path = simulated_file("relative", quiet_drive({{"a", 10.0, 0.1, 0.0, 0.5, 10}, {"b", 10.0, 0.1, -0.1, 0.2, 10}}));
+    const auto path = simulated_file(work, "relative", quiet_drive({{"a", 10.0, 0.1, 0.0, 0.5, 10}, {"b", 10.0, 0.1, -0.1, 0.2, 10}}));
     CHECK_NOTHROW(make_problem("pmsm_identification", {{"data", path.filename().string()}}, {work, 0}));
     Measurement bare = read_measurement(path);
     bare.t.reset();
@@ -236,7 +245,9 @@ TEST_CASE("with the seed's two operating points and realistic noise Ld and Lq ar
 }
 
 TEST_CASE("a box set by the experiment moves the reference optimum to the box's edge", "[pmsm][identification]") {
-    const auto path = simulated_file("quiet_paper_box", quiet_paper_drive());
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
+    const auto path = simulated_file(work, "quiet_paper_box", quiet_paper_drive());
     auto problem = make_problem("pmsm_identification", {{"data", path.string()}});
     const Eigen::Vector4d unconstrained = *problem->truth().reference_solution;
     REQUIRE(unconstrained[0] == Approx(46.0).epsilon(1e-6));

@@ -5,6 +5,8 @@
 
 #include "framework/input_error.hpp"
 #include "problems/pmsm/measurement.hpp"
+#include "problems/pmsm/text_file.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;
@@ -110,6 +112,31 @@ TEST_CASE("the measurement reader refuses bad input, naming file, line and colum
         CHECK(e.line() == 1);
         CHECK(e.field() == "column 2");
     }
+    SECTION("semicolon-separated export with decimal commas: the separator is named") {
+        const auto e = refusal("i_d;i_q;u_d;u_q;omega_e\n0,1;0,2;0,3;0,4;16,7\n");
+        CHECK(e.line() == 1);
+        CHECK(e.field() == "i_d");
+        CHECK(e.message().find("separated by ';'") != std::string::npos);
+        CHECK(e.message().find("'.' as decimal point") != std::string::npos);
+    }
+    SECTION("decimal commas in a comma-separated file: the row has too many fields, and the hint says why") {
+        const auto e = refusal("i_d,i_q,u_d,u_q,omega_e\n0,1,0,2,0,3,0,4,16,7\n");
+        CHECK(e.line() == 2);
+        CHECK(e.message() == "row has 10 fields but the header has 5 (a decimal comma? numbers must use '.' as the decimal mark)");
+    }
+    SECTION("binary input is named as such, never echoed raw") {
+        const char executable_start[] = "\x7f" "ELF\x02\x01\x01\0\0\0\n\x1b[2J";
+        const std::string binary(executable_start, sizeof executable_start - 1);
+        const auto e = refusal(binary);
+        CHECK(e.line() == 1);
+        CHECK(e.message() == "binary data (a NUL byte), not a CSV text file");
+        const auto escape = refusal("i_d,i_q,u_d,u_q,omega_e\n1,2,3,4,\x1b[2J\n");
+        CHECK(escape.line() == 2);
+        CHECK(escape.message() == "not a number: '\\x1B[2J'");
+        const auto header = refusal("\x1b]0;title\x07,i_q\n1,2\n");
+        CHECK(header.message().find('\x1b') == std::string::npos);
+        CHECK(header.message().find("\\x1B]0;title\\x07") != std::string::npos);
+    }
 }
 
 TEST_CASE("written measurements read back bit for bit", "[pmsm][measurement]") {
@@ -127,10 +154,10 @@ TEST_CASE("written measurements read back bit for bit", "[pmsm][measurement]") {
     m.segment = Eigen::VectorXi::Zero(n);
     m.segment.tail(20).setOnes();
 
-    const auto path = std::filesystem::temp_directory_path() / "mhbench_pmsm_roundtrip.csv";
+    const testing::TemporaryDirectory dir;
+    const auto path = dir.path() / "roundtrip.csv";
     write_measurement(path, m);
     const auto back = read_measurement(path);
-    std::filesystem::remove(path);
     CHECK(back.warnings.empty());
     CHECK(back.i_d == m.i_d);
     CHECK(back.i_q == m.i_q);
@@ -150,7 +177,9 @@ TEST_CASE("labels that CSV cannot carry are refused by the writer", "[pmsm][meas
     m.i_d = m.i_q = m.u_d = m.u_q = m.omega_e = Eigen::VectorXd::Zero(1);
     m.segment_labels = {"a,b"};
     m.segment = Eigen::VectorXi::Zero(1);
-    CHECK_THROWS_AS(write_measurement(std::filesystem::temp_directory_path() / "mhbench_pmsm_bad_label.csv", m), InputError);
+    const testing::TemporaryDirectory dir;
+    CHECK_THROWS_AS(write_measurement(dir.path() / "bad_label.csv", m), InputError);
+    CHECK_FALSE(std::filesystem::exists(dir.path() / "bad_label.csv"));
 }
 
 TEST_CASE("settled rows drop the start of every segment", "[pmsm][measurement]") {
@@ -170,4 +199,36 @@ TEST_CASE("settled rows drop the start of every segment", "[pmsm][measurement]")
     bare.resize(3);
     CHECK_THROWS_AS(settled_rows(bare, 0.1), InputError);
     CHECK(settled_rows(bare, 0.0).size() == 3);
+}
+
+TEST_CASE("files that are no measurement are refused with what they are, before memory runs out", "[pmsm][measurement]") {
+    const testing::TemporaryDirectory dir;
+    try {
+        read_measurement(dir.path());
+        FAIL("a directory was read as a measurement");
+    } catch (const InputError& e) {
+        CHECK(e.file() == dir.path().string());
+        CHECK_THAT(e.message(), Catch::Contains("is a directory"));
+    }
+    try {
+        read_measurement(dir.path() / "absent.csv");
+        FAIL("a missing file was read");
+    } catch (const InputError& e) {
+        CHECK_THAT(e.message(), Catch::Contains("No such file or directory"));
+    }
+    // /dev/zero never ends: reading stops at the limit instead of exhausting memory.
+    try {
+        read_text_file("/dev/zero", "measurement file", 1 << 20);
+        FAIL("an endless file was read");
+    } catch (const InputError& e) {
+        CHECK_THAT(e.message(), Catch::Contains("larger than the limit of 1048576 bytes"));
+    }
+}
+
+TEST_CASE("a measurement with more rows than the stated limit is refused before its columns are filled", "[pmsm][measurement]") {
+    std::string text = "i_d,i_q,u_d,u_q,omega_e\n";
+    text.append(static_cast<std::size_t>(max_measurement_rows) + 1, '\n');
+    const auto e = refusal(text);
+    CHECK_THAT(e.message(), Catch::Contains(std::to_string(max_measurement_rows + 1) + " rows") &&
+                                Catch::Contains("limit is " + std::to_string(max_measurement_rows)));
 }

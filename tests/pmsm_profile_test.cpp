@@ -4,10 +4,12 @@
 #include <fstream>
 #include <set>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "framework/input_error.hpp"
 #include "problems/pmsm/simulation_profile.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;
@@ -54,7 +56,8 @@ TEST_CASE("the paper profile is the seed's data collection", "[pmsm][profile]") 
     // About one electrical period at 10 r/min: 16 * 10 / 60 Hz for 0.4 s.
     CHECK(result.data.omega_e.mean() == Approx(16 * 10 * 2 * std::numbers::pi / 60).epsilon(1e-3));
 
-    const auto path = std::filesystem::temp_directory_path() / "mhbench_paper_profile.csv";
+    const testing::TemporaryDirectory dir;
+    const auto path = dir.path() / "paper_profile.csv";
     write_simulation(path, spec, result, "paper_profile.toml");
     const auto truth = read_sidecar_truth(path);
     REQUIRE(truth.has_value());
@@ -66,8 +69,6 @@ TEST_CASE("the paper profile is the seed's data collection", "[pmsm][profile]") 
     CHECK(j["segments"][1]["first_row"] == 500);
     CHECK(j["profile"] == "paper_profile.toml");
     CHECK(read_measurement(path).u_q == result.data.u_q);
-    std::filesystem::remove(path);
-    std::filesystem::remove(sidecar_path(path));
 }
 
 TEST_CASE("the multi-point profile covers both directions, loads and d currents", "[pmsm][profile]") {
@@ -190,6 +191,32 @@ TEST_CASE("bad profiles are refused naming file, line and field", "[pmsm][profil
         CHECK(e.line() == 5);
         CHECK(e.field() == "segment[2].label");
     }
+    SECTION("an integer beyond 2^53 where a number is expected (toml++ gives no double for it)") {
+        const auto e = profile_refusal("[motor]\nrs = 9007199254740993\n" + minimal_segment);
+        CHECK(e.line() == 2);
+        CHECK(e.field() == "motor.rs");
+        CHECK(e.message().find("9007199254740993") != std::string::npos);
+        const auto speed = profile_refusal("[[segment]]\nsamples = 3\nspeed = 18888888888888888\n");
+        CHECK(speed.line() == 3);
+        CHECK(speed.field() == "segment[1].speed");
+        const auto point = profile_refusal("[temperature]\nwinding = [[0, 20],\n  [9007199254740993, 30]]\n" + minimal_segment);
+        CHECK(point.line() == 3);
+        CHECK(point.field() == "temperature.winding");
+    }
+    SECTION("more samples in total than the stated limit, refused before anything is simulated") {
+        const std::string half = fmt::format("[[segment]]\nsamples = {}\n", max_measurement_rows / 2 + 1);
+        const auto e = profile_refusal(half + half);
+        CHECK(e.line() == 3);
+        CHECK(e.field() == "segment[2]");
+        CHECK(e.message().find(std::to_string(max_measurement_rows)) != std::string::npos);
+        const auto one = profile_refusal(fmt::format("[[segment]]\nsamples = {}\n", max_measurement_rows + 1));
+        CHECK(one.field() == "segment[1].samples");
+        // 10^5 s at the default 0.4 ms logging period is 2.5 * 10^8 samples.
+        const auto duration = profile_refusal("[[segment]]\nduration = 1e5\n");
+        CHECK(duration.line() == 2);
+        CHECK(duration.field() == "segment[1].duration");
+        CHECK(duration.message().find(std::to_string(max_measurement_rows)) != std::string::npos);
+    }
     SECTION("temperature points out of order") {
         const auto e = profile_refusal("[temperature]\nwinding = [[0, 20], [2, 30],\n  [1, 40]]\n" + minimal_segment);
         CHECK(e.line() == 3);
@@ -198,7 +225,8 @@ TEST_CASE("bad profiles are refused naming file, line and field", "[pmsm][profil
 }
 
 TEST_CASE("a sidecar that is not JSON is refused with its line", "[pmsm][profile]") {
-    const auto csv = std::filesystem::temp_directory_path() / "mhbench_bad_sidecar.csv";
+    const testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "bad_sidecar.csv";
     std::ofstream(sidecar_path(csv)) << "{\n  \"true_parameters\": {\n    \"Rs\": 4,\n  }\n}\n";
     try {
         read_sidecar_truth(csv);
@@ -210,7 +238,6 @@ TEST_CASE("a sidecar that is not JSON is refused with its line", "[pmsm][profile
     CHECK_THROWS_AS(read_sidecar_truth(csv), InputError);
     std::ofstream(sidecar_path(csv)) << R"({"seed": 4})";
     CHECK_FALSE(read_sidecar_truth(csv).has_value());
-    std::filesystem::remove(sidecar_path(csv));
 }
 
 TEST_CASE("the flux-map profile drives the measured machine from the shared data", "[pmsm][profile]") {
@@ -220,13 +247,12 @@ TEST_CASE("the flux-map profile drives the measured machine from the shared data
     const auto result = simulate(spec);
     CHECK(result.data.size() == 700);
     CHECK(result.data.i_q.cwiseAbs().maxCoeff() > 10.0);  // well into saturation
-    const auto path = std::filesystem::temp_directory_path() / "mhbench_flux_map_profile.csv";
+    const testing::TemporaryDirectory dir;
+    const auto path = dir.path() / "flux_map_profile.csv";
     write_simulation(path, spec, result, "flux_map_profile.toml");
     // A flux map has no single Ld, Lq: the sidecar says so instead of giving true parameters.
     CHECK_FALSE(read_sidecar_truth(path).has_value());
     std::ifstream in(sidecar_path(path));
     const auto j = nlohmann::json::parse(in);
     CHECK(j.contains("true_parameters_note"));
-    std::filesystem::remove(path);
-    std::filesystem::remove(sidecar_path(path));
 }

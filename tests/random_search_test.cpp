@@ -33,3 +33,12 @@ TEST_CASE("a seed fixes the whole trial", "[random_search]") {
     REQUIRE(ra.trace_best == rb.trace_best);
     REQUIRE(ra.trace_position.size() == 21);
 }
+
+TEST_CASE("an iteration budget at the int64 maximum runs to the evaluation budget (no overflow, no huge reservation)", "[random_search]") {
+    testing::ShiftedSphere sphere(2, -5, 5, 1.5);
+    auto opt = make_optimizer("random_search", {{"batch", std::int64_t{10}}});
+    const auto r = run_trial(*opt, sphere, {Budget{std::numeric_limits<std::int64_t>::max(), 100}, 3, false});
+    REQUIRE(r.ok);
+    REQUIRE(r.evaluations == 100);
+    REQUIRE(r.iterations == 9);  // 10 at initialisation, then 9 batches of 10
+}

@@ -14,6 +14,14 @@ TEST_CASE("plugins found case-insensitively, and unknown names list what exists"
     } catch (const UnknownPlugin& e) {
         REQUIRE_THAT(e.what(), Catch::Contains("random_search"));
     }
+    try {
+        make_optimizer("cmaez");
+        FAIL("accepted a misspelt optimizer");
+    } catch (const UnknownPlugin& e) {
+        // The closest name, then every name on a line of its own.
+        REQUIRE_THAT(e.what(), Catch::StartsWith("unknown optimizer 'cmaez'; did you mean 'cmaes'? Registered optimizers:\n"));
+        REQUIRE_THAT(e.what(), Catch::Contains("\n  random_search\n") || Catch::EndsWith("\n  random_search"));
+    }
     REQUIRE(OptimizerRegistry::instance().conflicts().empty());
     REQUIRE(ProblemRegistry::instance().conflicts().empty());
 }
@@ -32,4 +40,15 @@ TEST_CASE("registry lists names in natural order", "[registry]") {
     std::vector<std::string> names;
     for (const auto* e : local.entries()) names.push_back(e->name);
     REQUIRE(names == std::vector<std::string>{"bbob_f3", "F1", "F2", "F10"});
+}
+
+TEST_CASE("the closest name is suggested only when it is a likely typo", "[registry]") {
+    const std::vector<std::string> known{"cmaes", "de", "gwo", "isoa", "pso", "random_search", "soa"};
+    CHECK(closest_name("cmaez", known) == "cmaes");
+    CHECK(closest_name("CMAES", known) == "cmaes");
+    CHECK(closest_name("random_serach", known) == "random_search");
+    CHECK(closest_name("gw", known) == "gwo");
+    CHECK(closest_name("simulated_annealing", known).empty());
+    CHECK(unknown_name_message("command", "fitt", {"diagnose", "fit", "list"}) ==
+          "unknown command 'fitt'; did you mean 'fit'? Registered commands:\n  diagnose\n  fit\n  list");
 }

@@ -1,5 +1,6 @@
 #include "framework/cli/commands.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <new>
@@ -9,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "framework/closest_name.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 
@@ -33,6 +35,17 @@ int run(int argc, char** argv) {
     for (auto& [name, setup] : commands()) {
         auto action = setup(app);
         actions[app.get_subcommand(name)] = std::move(action);
+    }
+    // CLI11 would answer a mistyped command with "A subcommand is required"; name it and the closest.
+    if (argc >= 2 && argv[1][0] != '-') {
+        std::vector<std::string> names;
+        for (const auto& [name, setup] : commands()) names.push_back(name);
+        std::sort(names.begin(), names.end());
+        if (std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+            std::fprintf(stderr, "error: command line: %s\nRun 'mhbench --help' for usage.\n",
+                         unknown_name_message("command", argv[1], names).c_str());
+            return exit_bad_input;
+        }
     }
     try {
         app.parse(argc, argv);

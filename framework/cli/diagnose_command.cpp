@@ -1,7 +1,6 @@
 // `mhbench diagnose --data D.csv --model MODEL [--json OUT] [--report DIR]`: fits MODEL, then says
 // where it fails, which library effect is most likely missing and how sure that is
 // (docs/effects.md, "How diagnose decides"; docs/tutorial-missing-physics.md).
-#include <fstream>
 #include <memory>
 
 #include <CLI/CLI.hpp>
@@ -9,6 +8,7 @@
 
 #include "framework/cli/commands.hpp"
 #include "framework/cli/model_command_options.hpp"
+#include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/diagnosis_report.hpp"
@@ -28,7 +28,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     cmd->add_option("--report", o->report, "write report.md with PNG plots into this directory");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
-        OptimizerRegistry::instance().at(o->optimizer, "optimizer");
+        check_optimizer_option(o->optimizer);
         auto data = pmsm::read_settled_measurement(o->data, o->settle);
         pmsm::DiagnosisOptions options;
         options.fit.optimizer = o->optimizer;
@@ -41,7 +41,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;
-            std::ofstream(o->json) << out.dump(2) << "\n";
+            replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);
         }
         if (!o->report.empty()) {

@@ -1,7 +1,6 @@
 // `mhbench fit --data D.csv --model MODEL [--optimizer NAME] [--json OUT]`: identifies every parameter
 // of a model (base + effects, docs/effects.md) with 95 % intervals, and prints the residual rms of
 // u_d, u_q and combined, overall and per segment.
-#include <fstream>
 #include <memory>
 
 #include <CLI/CLI.hpp>
@@ -9,6 +8,7 @@
 
 #include "framework/cli/commands.hpp"
 #include "framework/cli/model_command_options.hpp"
+#include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/diagnosis_report.hpp"
@@ -22,7 +22,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
     add_model_options(cmd, *o, "model, e.g. base+deadtime+delay(tau=150e-6) (docs/effects.md)", "write the fit as JSON here");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
-        OptimizerRegistry::instance().at(o->optimizer, "optimizer");
+        check_optimizer_option(o->optimizer);
         const auto data = pmsm::read_settled_measurement(o->data, o->settle);
         pmsm::FitOptions options;
         options.optimizer = o->optimizer;
@@ -33,7 +33,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         if (!o->json.empty()) {
             auto out = pmsm::fit_json(fit);
             out["data"] = o->data;
-            std::ofstream(o->json) << out.dump(2) << "\n";
+            replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);
         }
         return exit_ok;

@@ -1,11 +1,19 @@
 #pragma once
 // Options shared by the commands that fit a PMSM model to measurements (`fit`, `diagnose`).
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "framework/cli/option_ranges.hpp"
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+
 namespace mhb::cli {
+
+// Each fit evaluates the model over every sample, so this bounds a fit to hours, not weeks.
+inline constexpr std::int64_t max_fit_evaluations = 10'000'000;
 
 struct ModelCommandOptions {
     std::string data, model = "base", json, optimizer = "cmaes";
@@ -19,10 +27,23 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
     cmd->add_option("--data", o.data, "measurement CSV (docs/data-format.md)")->required();
     cmd->add_option("--model", o.model, model_help);
     cmd->add_option("--optimizer", o.optimizer, "optimizer searching the nonlinear effect parameters");
-    cmd->add_option("--evaluations", o.evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)");
-    cmd->add_option("--seed", o.seed, "optimizer seed");
-    cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)");
+    cmd->add_option("--evaluations", o.evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)")
+        ->check(whole_number_in<std::int64_t>(0, max_fit_evaluations));
+    cmd->add_option("--seed", o.seed, "optimizer seed")
+        ->check(whole_number_in<std::uint64_t>(0, std::numeric_limits<std::uint64_t>::max()));
+    cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)")
+        ->check(number_in(0.0, 1e6));
     cmd->add_option("--json", o.json, json_help);
+}
+
+// The --optimizer value as a registered optimizer's name; a typo is refused naming the option and
+// the closest name, before any data is read.
+inline void check_optimizer_option(const std::string& name) {
+    try {
+        OptimizerRegistry::instance().at(name, "optimizer");
+    } catch (const UnknownPlugin& e) {
+        throw InputError("command line", 0, "--optimizer", e.what());
+    }
 }
 
 }  // namespace mhb::cli

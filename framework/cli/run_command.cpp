@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "framework/cli/commands.hpp"
+#include "framework/cli/option_ranges.hpp"
 #include "framework/experiment_runner.hpp"
 #include "framework/plots.hpp"
 #include "framework/report_tables.hpp"
@@ -45,7 +46,7 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
     };
     auto a = std::make_shared<Args>();
     cmd->add_option("FILE", a->file, "experiment TOML file (see experiments/ and docs/config-reference.md)")->required();
-    cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+    cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(whole_number_in(1, 4096));
     cmd->add_option("--out", a->out, "output directory (default: the config's `output`)");
     cmd->add_flag("--resume", a->resume, "keep the trials already in the output's results.jsonl and run only the missing ones");
     cmd->add_flag("--no-plots", a->no_plots, "write tables only");

@@ -1,6 +1,7 @@
 // `mhbench simulate PROFILE.toml --out data.csv [--seed N]`: runs the PMSM drive simulator on a
 // profile and writes the measurement CSV with its JSON sidecar (data.json) beside it.
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -8,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "framework/cli/commands.hpp"
+#include "framework/cli/option_ranges.hpp"
 #include "framework/input_error.hpp"
 #include "problems/pmsm/simulation_profile.hpp"
 
@@ -26,7 +28,8 @@ const bool registered = register_command("simulate", [](CLI::App& app) {
     auto options = std::make_shared<SimulateOptions>();
     cmd->add_option("profile", options->profile, "simulation profile (TOML, see docs/pmsm.md)")->required();
     cmd->add_option("--out", options->out, "measurement CSV to write (the sidecar goes beside it as .json)")->required();
-    options->seed_option = cmd->add_option("--seed", options->seed, "noise seed, overriding noise.seed of the profile");
+    options->seed_option = cmd->add_option("--seed", options->seed, "noise seed, overriding noise.seed of the profile")
+                               ->check(whole_number_in<std::uint64_t>(0, std::numeric_limits<std::int64_t>::max()));
     return std::function<int()>([options] {
         auto spec = pmsm::read_simulation_profile(options->profile);
         if (options->seed_option->count() > 0) spec.seed = options->seed;

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/plots.hpp"
 
@@ -723,7 +724,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     if (!said) md += "No near ties, every candidate is identifiable on this design, and every library effect was tried.\n";
     md += "\n";
     md += "How these verdicts are reached: docs/effects.md, \"How diagnose decides\".\n";
-    std::ofstream(directory / "report.md") << md;
+    replace_file(directory / "report.md", md);
     outcome.markdown = directory / "report.md";
     return outcome;
 }

@@ -1,5 +1,6 @@
 #include "problems/pmsm/measurement.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -33,6 +34,30 @@ std::vector<std::string_view> split_fields(std::string_view line) {
     return fields;
 }
 
+// A field as it may appear in a message: bytes a terminal would act on are shown as \xNN, and a long
+// field is cut, so that binary input never reaches the terminal raw.
+std::string shown(std::string_view field) {
+    constexpr std::size_t longest = 40;
+    std::string out;
+    for (std::size_t k = 0; k < field.size() && k < longest; ++k) {
+        const auto c = static_cast<unsigned char>(field[k]);
+        if (c < 0x20 || c >= 0x7f) out += fmt::format("\\x{:02X}", c);
+        else out += static_cast<char>(c);
+    }
+    if (field.size() > longest) out += "...";
+    return out;
+}
+
+// What a header without the required columns most likely means, when the file uses another separator.
+std::string separator_hint(std::string_view header_line) {
+    if (header_line.find(';') != std::string_view::npos)
+        return "; the header is separated by ';': mhbench reads comma-separated values with '.' as the decimal mark "
+               "(export the CSV with ',' as separator and '.' as decimal point)";
+    if (header_line.find('\t') != std::string_view::npos)
+        return "; the header is separated by tabs: mhbench reads comma-separated values";
+    return "";
+}
+
 bool is_blank(std::string_view line) {
     for (char c : line)
         if (c != ' ' && c != '\t' && c != '\r') return false;
@@ -62,6 +87,9 @@ Measurement parse_measurement(const std::string& text, const std::string& source
     if (all.size() >= 3 && all.substr(0, 3) == "\xEF\xBB\xBF") all.remove_prefix(3);  // UTF-8 byte-order mark
     if (all.find_first_not_of(" \t\r\n") == std::string_view::npos)
         throw InputError(source, 0, "", "empty file: expected a header row and data rows");
+    if (const auto nul = all.find('\0'); nul != std::string_view::npos)
+        throw InputError(source, 1 + static_cast<long>(std::count(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(nul), '\n')),
+                         "", "binary data (a NUL byte), not a CSV text file");
 
     std::vector<std::string_view> lines;
     for (std::size_t start = 0; start <= all.size();) {
@@ -73,6 +101,11 @@ Measurement parse_measurement(const std::string& text, const std::string& source
         lines.push_back(all.substr(start, nl - start));
         start = nl + 1;
     }
+
+    // Checked before any column is filled, so that an oversized file costs no more memory than its text.
+    if (static_cast<std::int64_t>(lines.size()) - 1 > max_measurement_rows)
+        throw InputError(source, 0, "", fmt::format("{} rows after the header; the limit is {} rows", lines.size() - 1,
+                                                     max_measurement_rows));
 
     Measurement m;
     m.source = source;
@@ -86,7 +119,7 @@ Measurement parse_measurement(const std::string& text, const std::string& source
         if (name.empty())
             throw InputError(source, 1, fmt::format("column {}", c + 1), "empty column name in the header");
         if (auto it = seen.find(name); it != seen.end())
-            throw InputError(source, 1, name, fmt::format("duplicate column (columns {} and {})", it->second + 1, c + 1));
+            throw InputError(source, 1, shown(name), fmt::format("duplicate column (columns {} and {})", it->second + 1, c + 1));
         seen.emplace(name, c);
         plan[c].name = name;
         if (auto it = numeric_targets.find(name); it != numeric_targets.end()) {
@@ -100,17 +133,18 @@ Measurement parse_measurement(const std::string& text, const std::string& source
         } else if (name == "segment") {
             plan[c].role = ColumnRole::Segment;
         } else {
-            m.warnings.push_back(fmt::format("{}: column '{}' is not used by mhbench and was ignored", source, name));
+            m.warnings.push_back(fmt::format("{}: column '{}' is not used by mhbench and was ignored", source, shown(name)));
         }
     }
     std::string header_text;
     for (const auto& h : header) {
         if (!header_text.empty()) header_text += ", ";
-        header_text += h;
+        header_text += shown(h);
     }
     for (const char* name : required_columns)
         if (!seen.count(name))
-            throw InputError(source, 1, name, fmt::format("missing required column (header has: {})", header_text));
+            throw InputError(source, 1, name,
+                             fmt::format("missing required column (header has: {}){}", header_text, separator_hint(lines[0])));
 
     std::vector<std::string> labels;
     std::map<std::string, int, std::less<>> label_index;
@@ -125,7 +159,8 @@ Measurement parse_measurement(const std::string& text, const std::string& source
         const auto fields = split_fields(lines[l]);
         if (fields.size() != header.size())
             throw InputError(source, line_no, "",
-                             fmt::format("row has {} fields but the header has {}", fields.size(), header.size()));
+                             fmt::format("row has {} fields but the header has {}{}", fields.size(), header.size(),
+                                         fields.size() > header.size() ? " (a decimal comma? numbers must use '.' as the decimal mark)" : ""));
         for (std::size_t c = 0; c < fields.size(); ++c) {
             const auto f = fields[c];
             switch (plan[c].role) {
@@ -147,11 +182,11 @@ Measurement parse_measurement(const std::string& text, const std::string& source
                     double value = 0.0;
                     const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
                     if (ec == std::errc::result_out_of_range)
-                        throw InputError(source, line_no, plan[c].name, fmt::format("value out of range: '{}'", f));
+                        throw InputError(source, line_no, plan[c].name, fmt::format("value out of range: '{}'", shown(f)));
                     if (ec != std::errc() || ptr != digits.data() + digits.size())
-                        throw InputError(source, line_no, plan[c].name, fmt::format("not a number: '{}'", f));
+                        throw InputError(source, line_no, plan[c].name, fmt::format("not a number: '{}'", shown(f)));
                     if (!std::isfinite(value))
-                        throw InputError(source, line_no, plan[c].name, fmt::format("not a finite number: '{}'", f));
+                        throw InputError(source, line_no, plan[c].name, fmt::format("not a finite number: '{}'", shown(f)));
                     plan[c].values.push_back(value);
                     break;
                 }

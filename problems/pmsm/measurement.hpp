@@ -2,6 +2,7 @@
 // A drive measurement: one row per logged sample, one column per signal, SI units, temperatures in °C.
 // The same format holds simulated and real data (docs/data-format.md). Columns are stored as Eigen
 // vectors so model evaluations run vectorised over samples.
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -31,6 +32,10 @@ struct Measurement {
     // Resizes every present column (required ones always) to n rows.
     void resize(Eigen::Index n);
 };
+
+// The most rows a measurement may have (and a simulation profile may ask for): the reader holds the
+// file and its columns in memory at once, about 300 bytes a row, so this stays near 1.5 GB.
+inline constexpr std::int64_t max_measurement_rows = 5'000'000;
 
 // Names of the columns, in the order the writer emits them.
 inline constexpr const char* required_columns[] = {"i_d", "i_q", "u_d", "u_q", "omega_e"};

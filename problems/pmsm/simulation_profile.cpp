@@ -44,12 +44,13 @@ public:
         const toml::node* n = table_.get(key);
         if (!n) return fallback;
         if (!n->is_number()) throw InputError(file_, line_of(*n), field(key), "expects a number");
-        const double v = n->value<double>().value();
-        if (!std::isfinite(v) || v < lo || v > hi || (positive && v <= 0.0)) {
+        const std::optional<double> v = n->value<double>();  // empty for an integer beyond ±2^53
+        if (!v || !std::isfinite(*v) || *v < lo || *v > hi || (positive && *v <= 0.0)) {
             const std::string range = positive && lo <= 0 ? fmt::format("(0, {}]", hi) : fmt::format("[{}, {}]", lo, hi);
-            throw InputError(file_, line_of(*n), field(key), fmt::format("must lie in {} (got {})", range, v));
+            const std::string got = n->is_integer() ? std::to_string(n->as_integer()->get()) : fmt::format("{}", *v);
+            throw InputError(file_, line_of(*n), field(key), fmt::format("must lie in {} (got {})", range, got));
         }
-        return v;
+        return *v;
     }
 
     std::int64_t integer(std::string_view key, std::int64_t fallback, std::int64_t lo, std::int64_t hi) const {
@@ -107,7 +108,8 @@ TemperatureProfile read_temperature(const TableReader& r, std::string_view key) 
         const toml::array* pair = point.as_array();
         if (!pair || pair->size() != 2 || !(*pair)[0].is_number() || !(*pair)[1].is_number())
             throw InputError(r.file(), line_of(point), field, "each point is [t in s, temperature in °C]");
-        const double t = (*pair)[0].value<double>().value(), temp = (*pair)[1].value<double>().value();
+        const std::optional<double> t_read = (*pair)[0].value<double>(), temp_read = (*pair)[1].value<double>();
+        const double t = t_read.value_or(inf), temp = temp_read.value_or(inf);  // empty beyond ±2^53
         if (!std::isfinite(t) || !std::isfinite(temp) || temp < -273.15 || temp > 1000.0)
             throw InputError(r.file(), line_of(point), field, "time and temperature must be finite, temperature >= -273.15 °C");
         if (!profile.points.empty() && t <= profile.points.back().first)
@@ -185,12 +187,17 @@ Segment read_segment(const std::string& file, const toml::node& node, std::size_
     if (has_samples == has_duration)
         throw InputError(file, line_of(node), prefix, "give exactly one of samples (count) and duration (s)");
     if (has_samples) {
-        s.samples = r.integer("samples", 0, 1, 100'000'000);
+        s.samples = r.integer("samples", 0, 1, max_measurement_rows);
     } else {
         const double duration = r.number("duration", 0.0, 0.0, 1e5, true);
-        s.samples = std::llround(duration / log_period);
-        if (s.samples < 1)
+        const double periods = std::round(duration / log_period);
+        if (periods < 1)
             throw InputError(file, line_of(*r.get("duration")), r.field("duration"), "shorter than one logging period");
+        if (periods > static_cast<double>(max_measurement_rows))
+            throw InputError(file, line_of(*r.get("duration")), r.field("duration"),
+                             fmt::format("{} s at a logging period of {} s is {:.0f} samples; the limit is {} per profile",
+                                         duration, log_period, periods, max_measurement_rows));
+        s.samples = static_cast<std::int64_t>(periods);
     }
     return s;
 }
@@ -299,7 +306,16 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
     if (!segments) throw InputError(file, 0, "segment", "a profile needs at least one [[segment]]");
     const toml::array* list = segments->as_array();
     if (!list || list->empty()) throw InputError(file, line_of(*segments), "segment", "expects an array of tables [[segment]]");
-    for (std::size_t k = 0; k < list->size(); ++k) sim.segments.push_back(read_segment(file, (*list)[k], k, sim.logging.period));
+    std::int64_t total_samples = 0;
+    for (std::size_t k = 0; k < list->size(); ++k) {
+        sim.segments.push_back(read_segment(file, (*list)[k], k, sim.logging.period));
+        total_samples += sim.segments.back().samples;
+        // Checked before anything is simulated: the whole measurement is held in memory and written as one CSV.
+        if (total_samples > max_measurement_rows)
+            throw InputError(file, line_of((*list)[k]), fmt::format("segment[{}]", k + 1),
+                             fmt::format("the segments up to here ask for {} samples; the limit is {} per profile "
+                                         "(a measurement file holds at most that many rows)", total_samples, max_measurement_rows));
+    }
     return sim;
 }
 
@@ -354,8 +370,11 @@ nlohmann::ordered_json simulation_sidecar(const DriveSimulation& spec, const Sim
     json effects = json::array();
     for (const auto& e : spec.effects) {
         json parameters = json::object();
-        for (const auto& [name, value] : e->settings().values())
-            std::visit([&](const auto& v) { parameters[name] = v; }, value);
+        // A named copy, not the structured binding: clang 14 cannot capture a binding in a lambda.
+        for (const auto& entry : e->settings().values()) {
+            const std::string& name = entry.first;
+            std::visit([&](const auto& v) { parameters[name] = v; }, entry.second);
+        }
         effects.push_back({{"name", e->name()}, {"parameters", parameters}});
     }
     j["effects"] = effects;

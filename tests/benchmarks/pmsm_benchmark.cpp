@@ -9,6 +9,7 @@
 #include "framework/registry.hpp"
 #include "problems/pmsm/base_model_fit.hpp"
 #include "problems/pmsm/simulation_profile.hpp"
+#include "tests/temporary_directory.hpp"
 
 namespace {
 
@@ -17,11 +18,12 @@ using namespace mhb::pmsm;
 
 const std::filesystem::path paper_profile = std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "paper_profile.toml";
 
-// The paper profile's 1000 samples, simulated once.
+// The paper profile's 1000 samples, simulated once into a directory of this run's own (removed at exit).
 const std::filesystem::path& paper_data() {
+    static const mhb::testing::TemporaryDirectory directory;
     static const std::filesystem::path path = [] {
         const auto spec = read_simulation_profile(paper_profile);
-        const auto p = std::filesystem::temp_directory_path() / "mhbench_pmsm_benchmark.csv";
+        const auto p = directory.path() / "paper_profile.csv";
         write_simulation(p, spec, simulate(spec), paper_profile.string());
         return p;
     }();
