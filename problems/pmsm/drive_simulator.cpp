@@ -8,6 +8,7 @@
 
 #include "framework/random.hpp"
 #include "problems/pmsm/controlled_plant.hpp"
+#include "problems/pmsm/device_plant.hpp"
 #include "problems/pmsm/field_oriented_controller.hpp"
 
 namespace mhb::pmsm {
@@ -243,11 +244,16 @@ SimulationResult simulate(const DriveSimulation& spec) {
     if (spec.segments.empty()) throw std::invalid_argument("a simulation needs at least one segment");
     if (!(motor.rs > 0 && motor.ld > 0 && motor.lq > 0 && motor.psi_f > 0 && motor.pole_pairs > 0))
         throw std::invalid_argument("motor parameters must be positive");
+    if (spec.device && !spec.effects.empty())
+        throw std::invalid_argument("the device plant takes its imperfections from its device settings; library "
+                                    "effects act on the averaged plant only");
     whole_ratio(c.control_period, c.integration_step, "control_period / integration_step");
     const std::int64_t controls_per_log = whole_ratio(spec.logging.period, c.control_period, "logging period / control_period");
     const double ts = c.control_period;
 
-    std::unique_ptr<ControlledPlant> plant = std::make_unique<AveragedPlant>(spec);
+    std::unique_ptr<ControlledPlant> plant;
+    if (spec.device) plant = make_device_plant(spec);
+    else plant = std::make_unique<AveragedPlant>(spec);
     FieldOrientedController controller(motor, spec.mechanics, c);
     const Complex log_offset = plant->logged_voltage_offset();
 
