@@ -3,10 +3,13 @@
 #include <catch2/catch.hpp>
 
 #include <complex>
+#include <filesystem>
 #include <numbers>
 
 #include <Eigen/Dense>
 
+#include "framework/input_error.hpp"
+#include "problems/pmsm/simulation_profile.hpp"
 #include "tests/pmsm_fixture.hpp"
 
 using namespace mhb;
@@ -320,4 +323,120 @@ TEST_CASE("the device plant refuses library effects", "[pmsm][device_plant]") {
     auto drive = device_drive(fast_points(10));
     drive.effects.push_back(make_effect("delay", {}));
     CHECK_THROWS_AS(simulate(drive), std::invalid_argument);
+}
+
+const std::string device_segment = "[[segment]]\nspeed = 10.0\nsamples = 5\n";
+
+TEST_CASE("the device plant is read from [plant] and recorded in the sidecar", "[pmsm][device_plant][profile]") {
+    const auto spec = parse_simulation_profile(R"(
+[plant]
+model = "device"
+[plant.inverter]
+dead_time = 1e-6
+switch_drop = 0.7
+diode_drop = 0.8
+delay_compensation = false
+[plant.encoder]
+lines = 2500
+offset = 0.02
+[plant.rotor_flux]
+harmonics = [{ order = 5, amplitude = 0.01, phase = 0.3 }, { order = 7, amplitude = 0.005 }]
+[plant.saturation]
+saturation_current = 1.5
+[plant.current_sensors]
+offset_a = 1e-3
+gain_b = 1.01
+[plant.thermal]
+winding_capacity = 0.04
+ambient = 25.0
+[plant.logging_offset]
+u_d = 0.01
+)" + device_segment, "d.toml", ".");
+    REQUIRE(spec.device);
+    const auto& d = *spec.device;
+    CHECK(d.inverter.dead_time == 1e-6);
+    CHECK(d.inverter.pwm_frequency == 10e3);
+    CHECK_FALSE(d.inverter.delay_compensation);
+    CHECK(d.encoder.lines == 2500);
+    REQUIRE(d.rotor_flux.harmonics.size() == 2);
+    CHECK(d.rotor_flux.harmonics[1].order == 7);
+    CHECK(d.rotor_flux.harmonics[1].phase == 0.0);
+    CHECK(d.saturation.saturation_current == 1.5);
+    CHECK(d.current_sensors.gain_b == 1.01);
+    CHECK(d.thermal.enabled);  // giving the table switches the network on
+    CHECK(d.thermal.initial_winding == 25.0);  // initial temperatures default to the ambient
+    CHECK(spec.logging.temperatures);
+    CHECK(d.logging_offset.u_d == 0.01);
+
+    SimulationResult result;
+    result.segments.push_back({"1", 0, 5, 0.0});
+    const auto j = simulation_sidecar(spec, result, "d.toml");
+    CHECK(j["plant"]["model"] == "device");
+    CHECK(j["plant"]["inverter"]["dead_time"] == 1e-6);
+    CHECK(j["plant"]["rotor_flux"]["harmonics"][0]["phase"] == 0.3);
+    CHECK(j["plant"]["thermal"]["alpha_magnet"] == -0.0012);
+    CHECK(j.contains("true_parameters_note"));
+
+    const auto averaged = parse_simulation_profile("[plant]\nmodel = \"averaged\"\n" + device_segment, "d.toml", ".");
+    CHECK_FALSE(averaged.device);
+    CHECK_FALSE(simulation_sidecar(averaged, result, "d.toml").contains("plant"));
+}
+
+TEST_CASE("the shipped device profile is the clean drive at the diagnosis profile's operating points", "[pmsm][device_plant][profile]") {
+    const auto dir = std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm";
+    const auto device = read_simulation_profile(dir / "device_diagnosis_profile.toml");
+    const auto averaged = read_simulation_profile(dir / "diagnosis_profile.toml");
+    REQUIRE(device.device);
+    CHECK(device.effects.empty());
+    CHECK(device.logging.theta);
+    CHECK(device.logging.temperatures);
+    REQUIRE(device.segments.size() == averaged.segments.size());
+    for (std::size_t k = 0; k < device.segments.size(); ++k) {
+        CHECK(device.segments[k].label == averaged.segments[k].label);
+        CHECK(device.segments[k].speed_rpm == averaged.segments[k].speed_rpm);
+        CHECK(device.segments[k].load_torque == averaged.segments[k].load_torque);
+        CHECK(device.segments[k].i_d == averaged.segments[k].i_d);
+        CHECK(device.segments[k].samples == averaged.segments[k].samples);
+    }
+    const DeviceSettings ideal;
+    CHECK(device.device->inverter.dead_time == ideal.inverter.dead_time);
+    CHECK(device.device->encoder.offset == ideal.encoder.offset);
+    CHECK(device.device->rotor_flux.harmonics.empty());
+    CHECK(device.device->current_sensors.gain_a == 1.0);
+    CHECK_FALSE(device.device->thermal.enabled);
+}
+
+TEST_CASE("bad device settings are refused naming file, line and field", "[pmsm][device_plant][profile]") {
+    struct Refusal {
+        std::string what, text;
+        long line;  // 0: not checked
+        std::string field, says;
+    };
+    const std::string device = "[plant]\nmodel = \"device\"\n";
+    const std::vector<Refusal> refusals{
+        {"library effects with the device plant", device + "[effects.deadtime]\nvoltage = 0.3\n", 3, "effects", "averaged plant"},
+        {"prescribed temperatures with the device plant", "[temperature]\nwinding = 40\n" + device, 1, "temperature", "[plant.thermal]"},
+        {"unknown model", "[plant]\nmodel = \"switching\"\n", 2, "plant.model", "device"},
+        {"device tables with the averaged plant", "[plant]\n[plant.inverter]\ndead_time = 1e-6\n", 0, "plant.inverter", "unknown key"},
+        {"unknown device key", device + "[plant.encoder]\nline = 1000\n", 4, "plant.encoder.line", "lines"},
+        {"wrong type", device + "[plant.inverter]\ndelay_compensation = 1\n", 4, "plant.inverter.delay_compensation", "true or false"},
+        {"out of range", device + "[plant.current_sensors]\ngain_a = 0.0\n", 4, "plant.current_sensors.gain_a", "(0, 10]"},
+        {"carrier that does not tile the control period", device + "[plant.inverter]\npwm_frequency = 15e3\n", 4,
+         "plant.inverter.pwm_frequency", "whole number"},
+        {"dead time of a quarter carrier", device + "[plant.inverter]\ndead_time = 30e-6\n", 4, "plant.inverter.dead_time", "quarter"},
+        {"a triplen flux harmonic", device + "[plant.rotor_flux]\nharmonics = [{ order = 9, amplitude = 0.01 }]\n", 4,
+         "plant.rotor_flux.harmonics[1].order", "multiple of 3"},
+    };
+    for (const auto& r : refusals) {
+        INFO(r.what);
+        try {
+            parse_simulation_profile(r.text + device_segment, "d.toml", ".");
+            FAIL("accepted");
+        } catch (const InputError& e) {
+            CHECK(e.file() == "d.toml");
+            if (r.line) CHECK(e.line() == r.line);
+            CHECK(e.field() == r.field);
+            CHECK(e.message().find(r.says) != std::string::npos);
+        }
+    }
 }
