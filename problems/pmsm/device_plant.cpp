@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -135,6 +136,11 @@ public:
             flux_ = std::make_unique<SaturatingIron>(spec.motor.ld, spec.motor.lq, device_.saturation.saturation_current);
         else
             flux_ = std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
+        for (const auto& h : device_.rotor_flux.harmonics) {
+            std::array<Complex, 3> turns;
+            for (std::size_t x = 0; x < 3; ++x) turns[x] = std::polar(1.0, -2.0 * std::numbers::pi * h.order * static_cast<double>(x) / 3.0);
+            phase_turns_.push_back(turns);
+        }
         count_angle_ = device_.encoder.lines > 0 ? 2.0 * std::numbers::pi / (4.0 * static_cast<double>(device_.encoder.lines)) : 0.0;
         update_coefficients();
         // At rest the stator links the magnet flux only.
@@ -205,17 +211,19 @@ private:
     }
 
     // Magnet flux linked by phase x at theta_x = theta - 2 pi x / 3, beyond its fundamental:
-    // psi_f sum_h k_h cos(h theta_x + phi_h), and its slope with the rotor angle.
+    // psi_f sum_h k_h cos(h theta_x + phi_h), and its slope with the rotor angle. Each harmonic's
+    // phasor e^{j(h theta + phi)} is turned by e^{-j 2 pi h x / 3} for phase x.
     Magnet magnet_flux(double theta) const {
         Magnet m;
         if (device_.rotor_flux.harmonics.empty()) return m;
         std::array<double, 3> flux{};
-        for (int x = 0; x < 3; ++x) {
-            const double theta_x = theta - 2.0 * std::numbers::pi * x / 3.0;
-            for (const auto& h : device_.rotor_flux.harmonics) {
-                const Complex e = std::polar(h.amplitude * psi_f_, h.order * theta_x + h.phase);
-                flux[static_cast<std::size_t>(x)] += e.real();
-                m.harmonic_slope[static_cast<std::size_t>(x)] -= h.order * e.imag();
+        for (std::size_t k = 0; k < device_.rotor_flux.harmonics.size(); ++k) {
+            const auto& h = device_.rotor_flux.harmonics[k];
+            const Complex phasor = std::polar(h.amplitude * psi_f_, h.order * theta + h.phase);
+            for (std::size_t x = 0; x < 3; ++x) {
+                const Complex e = phasor * phase_turns_[k][x];
+                flux[x] += e.real();
+                m.harmonic_slope[x] -= h.order * e.imag();
             }
         }
         m.harmonic_flux = clarke(flux[0], flux[1], flux[2]);
@@ -227,10 +235,11 @@ private:
     Electrical electrical(const State& x) {
         const double theta = pole_pairs_ * x.theta_m;
         const Magnet magnet = magnet_flux(theta);
-        const Complex psi_dq = park(x.psi - magnet.harmonic_flux, theta);
+        const Complex rotor = std::polar(1.0, theta);
+        const Complex psi_dq = (x.psi - magnet.harmonic_flux) * std::conj(rotor);
         guess_ = flux_->current(psi_dq, psi_f_, guess_);
         Electrical e;
-        e.current = inverse_park(guess_, theta);
+        e.current = guess_ * rotor;
         e.phase = inverse_clarke(e.current);
         // Torque: the dq machine's from its flux, the harmonics' from the power they convert,
         // p sum_x i_x d psi_x / d theta.
@@ -239,24 +248,23 @@ private:
         return e;
     }
 
-    State rate(const State& x, Complex u, double load_torque, Electrical* at_state = nullptr) {
-        const Electrical e = electrical(x);
-        if (at_state) *at_state = e;
+    State rate(const State& x, const Electrical& e, Complex u, double load_torque) const {
         State r;
         r.psi = u - rs_ * e.current;
         r.omega_m = (e.torque - load_torque - spec_.mechanics.viscous_friction * x.omega_m) / inertia_;
         r.theta_m = x.omega_m;
         return r;
     }
+    State rate(const State& x, Complex u, double load_torque) { return rate(x, electrical(x), u, load_torque); }
 
     static State advanced(const State& x, const State& r, double h) {
         return {x.psi + h * r.psi, x.omega_m + h * r.omega_m, x.theta_m + h * r.theta_m};
     }
 
-    // One RK4 step with the terminal voltage u held; returns the copper energy of the step (J).
-    double step(double h, Complex u, double load_torque) {
-        Electrical e;
-        const State k1 = rate(x_, u, load_torque, &e);
+    // One RK4 step with the terminal voltage u held, from the present state whose currents and
+    // torque are `start`; returns the copper energy of the step (J).
+    double step(double h, Complex u, double load_torque, const Electrical& start) {
+        const State k1 = rate(x_, start, u, load_torque);
         const State k2 = rate(advanced(x_, k1, 0.5 * h), u, load_torque);
         const State k3 = rate(advanced(x_, k2, 0.5 * h), u, load_torque);
         const State k4 = rate(advanced(x_, k3, h), u, load_torque);
@@ -264,7 +272,7 @@ private:
         x_.omega_m += h / 6.0 * (k1.omega_m + 2.0 * k2.omega_m + 2.0 * k3.omega_m + k4.omega_m);
         x_.theta_m = wrap_angle(x_.theta_m + h / 6.0 * (k1.theta_m + 2.0 * k2.theta_m + 2.0 * k3.theta_m + k4.theta_m));
         ++steps_;
-        return rs_ * (e.phase[0] * e.phase[0] + e.phase[1] * e.phase[1] + e.phase[2] * e.phase[2]) * h;
+        return rs_ * (start.phase[0] * start.phase[0] + start.phase[1] * start.phase[1] + start.phase[2] * start.phase[2]) * h;
     }
 
     // Leg x is on its upper transistor while the carrier (1 at the period's start and end, 0 in its
@@ -324,7 +332,7 @@ private:
                                      leg_voltage(gate(2, middle), e.phase[2]));
             const auto substeps = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(length / h_max - 1e-9)));
             const double h = length / static_cast<double>(substeps);
-            for (std::int64_t s = 0; s < substeps; ++s) energy += step(h, u, load_torque);
+            for (std::int64_t s = 0; s < substeps; ++s) energy += step(h, u, load_torque, s == 0 ? e : electrical(x_));
         }
         return energy;
     }
@@ -337,6 +345,7 @@ private:
     double carrier_period_;
     HeatedWindingAndMagnet thermal_;
     std::unique_ptr<FluxModel> flux_;
+    std::vector<std::array<Complex, 3>> phase_turns_;  // per harmonic: e^{-j 2 pi h x / 3}, x = 0, 1, 2
     double count_angle_ = 0.0;  // shaft angle of one encoder count (rad); 0 = exact
     double rs_ = 0.0, psi_f_ = 0.0;
     std::array<double, 3> duty_{0.5, 0.5, 0.5};  // zero voltage before the first reference
