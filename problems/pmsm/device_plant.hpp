@@ -8,7 +8,6 @@
 // harmonics, saturating iron and a two-node thermal network complete it. docs/pmsm.md, "The device
 // plant", gives every equation.
 #include <memory>
-#include <stdexcept>
 
 #include "problems/pmsm/controlled_plant.hpp"
 #include "problems/pmsm/device_settings.hpp"
