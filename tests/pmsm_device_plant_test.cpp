@@ -319,6 +319,29 @@ TEST_CASE("a logging-channel offset shifts only the logged voltages", "[pmsm][de
     CHECK((b.data.i_d - a.data.i_d).cwiseAbs().maxCoeff() == 0.0);
 }
 
+TEST_CASE("a device study varies settings and seeds from one profile", "[pmsm][device_plant]") {
+    const auto profile = read_simulation_profile(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" /
+                                                 "device_diagnosis_profile.toml");
+    DeviceSettings encoder = *profile.device;
+    encoder.encoder.offset = 0.02;
+    const auto a = with_device(profile, encoder, 1), b = with_device(profile, encoder, 2);
+    CHECK(a.device->encoder.offset == 0.02);
+    CHECK(a.seed == 1);
+    CHECK(a.segments.size() == profile.segments.size());
+    CHECK(a.noise.current == profile.noise.current);
+    CHECK(a.logging.temperatures);
+    auto shorter = [](DriveSimulation d) {
+        d.segments.resize(2);
+        return d;
+    };
+    const auto ra = simulate(shorter(with_device(profile, encoder, 1)));
+    const auto ra_again = simulate(shorter(with_device(profile, encoder, 1)));
+    const auto rb = simulate(shorter(with_device(profile, encoder, 2)));
+    CHECK(ra.data.u_d == ra_again.data.u_d);  // a seed fixes the record
+    CHECK(ra.data.u_d != rb.data.u_d);        // another seed, other noise
+    CHECK(b.seed == 2);
+}
+
 TEST_CASE("the device plant refuses library effects", "[pmsm][device_plant]") {
     auto drive = device_drive(fast_points(10));
     drive.effects.push_back(make_effect("delay", {}));

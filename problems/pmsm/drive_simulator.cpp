@@ -238,6 +238,20 @@ private:
 
 }  // namespace
 
+DriveSimulation with_device(const DriveSimulation& base, const DeviceSettings& device, std::uint64_t seed) {
+    DriveSimulation d;
+    d.motor = base.motor;
+    d.mechanics = base.mechanics;
+    d.control = base.control;
+    d.logging = base.logging;
+    d.noise = base.noise;
+    d.seed = seed;
+    d.segments = base.segments;
+    d.base_directory = base.base_directory;
+    d.device = device;
+    return d;
+}
+
 SimulationResult simulate(const DriveSimulation& spec) {
     const auto& c = spec.control;
     const auto& motor = spec.motor;

@@ -99,6 +99,12 @@ struct SimulationResult {
     std::int64_t integration_steps = 0;
 };
 
+// A copy of `base` (motor, mechanics, control, logging, noise, segments, base directory) on the device
+// plant with `device` and noise seed `seed`: what a study varying device settings over seeds runs,
+// one copy per simulation. `base`'s effects and temperature profiles are not copied (the device
+// plant has its own).
+DriveSimulation with_device(const DriveSimulation& base, const DeviceSettings& device, std::uint64_t seed);
+
 // Runs the whole profile on the plant it selects. Throws std::invalid_argument on inconsistent
 // settings (e.g. an integration step that does not divide the control period, effects with a device
 // plant).
