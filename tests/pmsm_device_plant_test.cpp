@@ -309,6 +309,22 @@ TEST_CASE("saturating iron: the steady state follows the magnetic co-energy law"
     });
 }
 
+TEST_CASE("equal on-resistances of transistors and diodes are a series resistance", "[pmsm][device_plant]") {
+    // Whichever device of a leg conducts, the phase sees r_on in series: R_s + r_on in the
+    // steady state (the reference's "never separable from R_s").
+    const double r_on = 2.0;
+    auto drive = device_drive(fast_points(250));
+    drive.device->inverter.switch_resistance = r_on;
+    drive.device->inverter.diode_resistance = r_on;
+    const auto result = simulate(drive);
+    MotorParameters with_switches = drive.motor;
+    with_switches.rs += r_on;
+    each_segment(drive, result, [&](const Segment&, const SegmentRows& rows, double) {
+        CHECK(std::abs(mean(base_residual(result.data, with_switches, rows))) < 5e-3);
+        CHECK(std::abs(mean(base_residual(result.data, drive.motor, rows))) > 0.1);
+    });
+}
+
 TEST_CASE("a logging-channel offset shifts only the logged voltages", "[pmsm][device_plant]") {
     const auto clean = device_drive(fast_points(100));
     auto offset = device_drive(fast_points(100));

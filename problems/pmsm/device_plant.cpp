@@ -24,8 +24,8 @@ void check_device_settings(const DeviceSettings& device, const DriveControl& con
             "carrier peak once per control period)", carriers));
     if (!(inv.dead_time >= 0) || inv.dead_time >= 0.25 / inv.pwm_frequency)
         throw std::invalid_argument("inverter.dead_time must lie in [0, a quarter of the carrier period)");
-    if (!(inv.switch_drop >= 0) || !(inv.diode_drop >= 0))
-        throw std::invalid_argument("inverter.switch_drop and inverter.diode_drop must not be negative");
+    if (!(inv.switch_drop >= 0) || !(inv.diode_drop >= 0) || !(inv.switch_resistance >= 0) || !(inv.diode_resistance >= 0))
+        throw std::invalid_argument("inverter device drops and on-resistances must not be negative");
     if (device.encoder.lines < 0) throw std::invalid_argument("encoder.lines must not be negative");
     for (const auto& h : device.rotor_flux.harmonics)
         if (h.order < 5 || h.order % 2 == 0 || h.order % 3 == 0 || !(h.amplitude >= 0))
@@ -249,22 +249,32 @@ private:
         return e;
     }
 
-    State rate(const State& x, const Electrical& e, Complex u, double load_torque) const {
+    // What the inverter holds at the terminals over an interval: source voltages (alpha-beta) and the
+    // conducting devices' on-resistances, whose drop follows the current within the interval.
+    struct Terminals {
+        Complex source;
+        std::array<double, 3> resistance{};
+        bool resistive = false;
+    };
+
+    State rate(const State& x, const Electrical& e, const Terminals& u, double load_torque) const {
         State r;
-        r.psi = u - rs_ * e.current;
+        r.psi = u.source - rs_ * e.current;
+        if (u.resistive)
+            r.psi -= clarke(u.resistance[0] * e.phase[0], u.resistance[1] * e.phase[1], u.resistance[2] * e.phase[2]);
         r.omega_m = (e.torque - load_torque - spec_.mechanics.viscous_friction * x.omega_m) / inertia_;
         r.theta_m = x.omega_m;
         return r;
     }
-    State rate(const State& x, Complex u, double load_torque) { return rate(x, electrical(x), u, load_torque); }
+    State rate(const State& x, const Terminals& u, double load_torque) { return rate(x, electrical(x), u, load_torque); }
 
     static State advanced(const State& x, const State& r, double h) {
         return {x.psi + h * r.psi, x.omega_m + h * r.omega_m, x.theta_m + h * r.theta_m};
     }
 
-    // One RK4 step with the terminal voltage u held, from the present state whose currents and
-    // torque are `start`; returns the copper energy of the step (J).
-    double step(double h, Complex u, double load_torque, const Electrical& start) {
+    // One RK4 step with the terminals u held, from the present state whose currents and torque are
+    // `start`; returns the copper energy of the step (J).
+    double step(double h, const Terminals& u, double load_torque, const Electrical& start) {
         const State k1 = rate(x_, start, u, load_torque);
         const State k2 = rate(advanced(x_, k1, 0.5 * h), u, load_torque);
         const State k3 = rate(advanced(x_, k2, 0.5 * h), u, load_torque);
@@ -291,19 +301,25 @@ private:
         return Gate::none;
     }
 
-    // Leg voltage against the DC link's negative rail: the gate decides which device may conduct, the
-    // current's direction which one does (a diode when it flows against the transistor, both diodes'
-    // choice in the dead time).
-    double leg_voltage(Gate g, double current) const {
+    struct LegConduction {
+        double voltage = 0.0;     // V against the DC link's negative rail at zero current
+        double resistance = 0.0;  // Ω of the conducting device: the leg voltage falls by resistance x i
+    };
+
+    // The gate decides which device may conduct, the current's direction which one does (a diode when
+    // it flows against the transistor, both diodes' choice in the dead time).
+    LegConduction leg(Gate g, double current) const {
         const auto& inv = device_.inverter;
         const double vdc = spec_.control.dc_voltage;
+        const LegConduction upper_diode{vdc + inv.diode_drop, inv.diode_resistance},
+            lower_diode{-inv.diode_drop, inv.diode_resistance};
         const bool outward = current > 0.0;  // out of the leg into the motor
         switch (g) {
-        case Gate::upper: return outward ? vdc - inv.switch_drop : vdc + inv.diode_drop;
-        case Gate::lower: return outward ? -inv.diode_drop : inv.switch_drop;
-        case Gate::none: return outward ? -inv.diode_drop : vdc + inv.diode_drop;
+        case Gate::upper: return outward ? LegConduction{vdc - inv.switch_drop, inv.switch_resistance} : upper_diode;
+        case Gate::lower: return outward ? lower_diode : LegConduction{inv.switch_drop, inv.switch_resistance};
+        case Gate::none: return outward ? lower_diode : upper_diode;
         }
-        return 0.0;
+        return {};
     }
 
     // One carrier period from a carrier peak: between switching instants the leg voltages are held
@@ -329,8 +345,12 @@ private:
             if (length <= 1e-15 * carrier_period_) continue;
             const Electrical e = electrical(x_);
             const double middle = begin + 0.5 * length;
-            const Complex u = clarke(leg_voltage(gate(0, middle), e.phase[0]), leg_voltage(gate(1, middle), e.phase[1]),
-                                     leg_voltage(gate(2, middle), e.phase[2]));
+            std::array<LegConduction, 3> legs;
+            for (std::size_t x = 0; x < 3; ++x) legs[x] = leg(gate(static_cast<int>(x), middle), e.phase[x]);
+            Terminals u;
+            u.source = clarke(legs[0].voltage, legs[1].voltage, legs[2].voltage);
+            for (std::size_t x = 0; x < 3; ++x) u.resistance[x] = legs[x].resistance;
+            u.resistive = u.resistance[0] > 0 || u.resistance[1] > 0 || u.resistance[2] > 0;
             const auto substeps = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(length / h_max - 1e-9)));
             const double h = length / static_cast<double>(substeps);
             for (std::int64_t s = 0; s < substeps; ++s) energy += step(h, u, load_torque, s == 0 ? e : electrical(x_));

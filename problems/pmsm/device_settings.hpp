@@ -14,6 +14,8 @@ struct InverterDevice {
     double dead_time = 0.0;          // s, delay of every transistor turn-on edge
     double switch_drop = 0.0;        // V, conducting transistor (threshold voltage)
     double diode_drop = 0.0;         // V, conducting free-wheeling diode
+    double switch_resistance = 0.0;  // Ω, conducting transistor's on-resistance
+    double diode_resistance = 0.0;   // Ω, conducting diode's slope resistance
     bool delay_compensation = true;  // advance the modulation angle by 1.5 omega T_s
 };
 

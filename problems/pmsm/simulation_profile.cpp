@@ -215,12 +215,15 @@ long line_of_key(const toml::table& t, std::string_view key, long fallback) {
 InverterDevice read_inverter(const std::string& file, const toml::table& plant, double control_period) {
     const auto& t = device_subtable(file, plant, "inverter");
     TableReader r(file, t, "plant.inverter", 0);
-    r.allow_only({"pwm_frequency", "dead_time", "switch_drop", "diode_drop", "delay_compensation"});
+    r.allow_only({"pwm_frequency", "dead_time", "switch_drop", "diode_drop", "switch_resistance", "diode_resistance",
+                  "delay_compensation"});
     InverterDevice inv;
     inv.pwm_frequency = r.number("pwm_frequency", inv.pwm_frequency, 0.0, 1e7, true);
     inv.dead_time = r.number("dead_time", inv.dead_time, 0.0, 1e-3);
     inv.switch_drop = r.number("switch_drop", inv.switch_drop, 0.0, 100.0);
     inv.diode_drop = r.number("diode_drop", inv.diode_drop, 0.0, 100.0);
+    inv.switch_resistance = r.number("switch_resistance", inv.switch_resistance, 0.0, 1e3);
+    inv.diode_resistance = r.number("diode_resistance", inv.diode_resistance, 0.0, 1e3);
     inv.delay_compensation = r.boolean("delay_compensation", inv.delay_compensation);
     // The currents are sampled at a carrier peak once per control period, so whole carriers must
     // tile it; the dead time must leave every pulse its two edges.
@@ -351,7 +354,8 @@ nlohmann::ordered_json device_sidecar(const DeviceSettings& d) {
     const auto& cs = d.current_sensors;
     return {{"model", "device"},
             {"inverter", {{"pwm_frequency", inv.pwm_frequency}, {"dead_time", inv.dead_time}, {"switch_drop", inv.switch_drop},
-                          {"diode_drop", inv.diode_drop}, {"delay_compensation", inv.delay_compensation}}},
+                          {"diode_drop", inv.diode_drop}, {"switch_resistance", inv.switch_resistance},
+                          {"diode_resistance", inv.diode_resistance}, {"delay_compensation", inv.delay_compensation}}},
             {"encoder", {{"lines", d.encoder.lines}, {"offset", d.encoder.offset}}},
             {"rotor_flux", {{"harmonics", harmonics}}},
             {"saturation", {{"saturation_current", d.saturation.saturation_current}}},
