@@ -7,6 +7,9 @@
 #include <fmt/format.h>
 
 #include "framework/random.hpp"
+#include "problems/pmsm/controlled_plant.hpp"
+#include "problems/pmsm/device_plant.hpp"
+#include "problems/pmsm/field_oriented_controller.hpp"
 
 namespace mhb::pmsm {
 
@@ -149,7 +152,105 @@ private:
     bool started_ = false;
 };
 
+// The averaged plant as the drive sees it: the effects' sensor hooks, their inverter command
+// shortfall and delay line in front of the machine, and the prescribed temperature profiles.
+class AveragedPlant final : public ControlledPlant {
+public:
+    explicit AveragedPlant(const DriveSimulation& spec)
+        : spec_(spec), plant_(spec, linear_or_effect_flux(spec)),
+          steps_per_control_(whole_ratio(spec.control.control_period, spec.control.integration_step,
+                                         "control_period / integration_step")),
+          h_(spec.control.control_period / static_cast<double>(steps_per_control_)) {
+        double delay = 0.0;
+        for (const auto& e : spec.effects) {
+            angle_offset_ += e->plant_angle_offset();
+            sensor_offset_ += e->plant_current_sensor_offset();
+            delay += e->plant_delay();
+            shortfall_ += e->plant_command_shortfall();
+        }
+        // Delay line of the inverter: commands and true angles, one entry per integration step.
+        delay_steps_ = static_cast<std::size_t>(std::llround(delay / h_));
+        command_history_.resize(delay_steps_ + 1);
+        angle_history_.resize(delay_steps_ + 1);
+        x_ = plant_.rest_state();
+    }
+
+    SensorReading sense(double t, Rng& rng) override {
+        // Two phase currents and the encoder angle, as the controller sees them.
+        const double theta_true = plant_.electrical_angle(x_);
+        const auto phase = inverse_clarke(inverse_park(plant_.current(x_, t), theta_true));
+        double i_a = phase[0], i_b = phase[1];
+        if (spec_.noise.current > 0) {
+            i_a += spec_.noise.current * rng.normal();
+            i_b += spec_.noise.current * rng.normal();
+        }
+        SensorReading r;
+        r.current = Complex{i_a, (i_a + 2.0 * i_b) / std::numbers::sqrt3} + sensor_offset_;
+        r.angle = wrap_angle(theta_true + angle_offset_);
+        r.true_speed = static_cast<double>(spec_.motor.pole_pairs) * x_.omega_m;
+        return r;
+    }
+
+    // The command (less any shortfall) goes through the delay line and is applied in the controller's
+    // rotating frame, which leads the rotor frame by the offset.
+    void run_control_period(double t, Complex voltage_reference, const SensorReading&, double,
+                            const Segment& segment) override {
+        const Complex command = voltage_reference - shortfall_;
+        for (std::int64_t n = 0; n < steps_per_control_; ++n, ++step_index_) {
+            const double t_step = t + static_cast<double>(n) * h_;
+            const double theta_now = plant_.electrical_angle(x_);
+            const auto slot = static_cast<std::size_t>(step_index_) % command_history_.size();
+            command_history_[slot] = command;
+            angle_history_[slot] = theta_now;
+            Complex applied;
+            if (step_index_ >= static_cast<std::int64_t>(delay_steps_)) {
+                const auto old = static_cast<std::size_t>(step_index_ - static_cast<std::int64_t>(delay_steps_)) % command_history_.size();
+                const double lag = wrap_angle(theta_now - angle_history_[old]);
+                applied = std::polar(1.0, angle_offset_ - lag) * command_history_[old];
+            }
+            plant_.step(x_, t_step, h_, applied, segment.load_torque);
+        }
+    }
+
+    Temperatures temperatures(double t) const override { return {spec_.temp_winding.at(t), spec_.temp_magnet.at(t)}; }
+    std::int64_t integration_steps() const override { return step_index_; }
+
+private:
+    static std::unique_ptr<FluxModel> linear_or_effect_flux(const DriveSimulation& spec) {
+        std::unique_ptr<FluxModel> flux = std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
+        for (const auto& e : spec.effects)
+            if (auto replacement = e->plant_flux_model(spec.motor, spec.base_directory)) flux = std::move(replacement);
+        return flux;
+    }
+
+    const DriveSimulation& spec_;
+    Plant plant_;
+    std::int64_t steps_per_control_;
+    double h_;
+    double angle_offset_ = 0.0;
+    Complex sensor_offset_, shortfall_;
+    std::size_t delay_steps_ = 0;
+    std::vector<Complex> command_history_;
+    std::vector<double> angle_history_;
+    std::int64_t step_index_ = 0;
+    PlantState x_;
+};
+
 }  // namespace
+
+DriveSimulation with_device(const DriveSimulation& base, const DeviceSettings& device, std::uint64_t seed) {
+    DriveSimulation d;
+    d.motor = base.motor;
+    d.mechanics = base.mechanics;
+    d.control = base.control;
+    d.logging = base.logging;
+    d.noise = base.noise;
+    d.seed = seed;
+    d.segments = base.segments;
+    d.base_directory = base.base_directory;
+    d.device = device;
+    return d;
+}
 
 SimulationResult simulate(const DriveSimulation& spec) {
     const auto& c = spec.control;
@@ -157,39 +258,18 @@ SimulationResult simulate(const DriveSimulation& spec) {
     if (spec.segments.empty()) throw std::invalid_argument("a simulation needs at least one segment");
     if (!(motor.rs > 0 && motor.ld > 0 && motor.lq > 0 && motor.psi_f > 0 && motor.pole_pairs > 0))
         throw std::invalid_argument("motor parameters must be positive");
-    const std::int64_t steps_per_control = whole_ratio(c.control_period, c.integration_step, "control_period / integration_step");
+    if (spec.device && !spec.effects.empty())
+        throw std::invalid_argument("the device plant takes its imperfections from its device settings; library "
+                                    "effects act on the averaged plant only");
+    whole_ratio(c.control_period, c.integration_step, "control_period / integration_step");
     const std::int64_t controls_per_log = whole_ratio(spec.logging.period, c.control_period, "logging period / control_period");
-    const double h = c.control_period / static_cast<double>(steps_per_control);
     const double ts = c.control_period;
 
-    std::unique_ptr<FluxModel> flux = std::make_unique<LinearFlux>(motor.ld, motor.lq);
-    double angle_offset = 0.0, delay = 0.0;
-    Complex sensor_offset, shortfall;
-    for (const auto& e : spec.effects) {
-        if (auto replacement = e->plant_flux_model(motor, spec.base_directory)) flux = std::move(replacement);
-        angle_offset += e->plant_angle_offset();
-        sensor_offset += e->plant_current_sensor_offset();
-        delay += e->plant_delay();
-        shortfall += e->plant_command_shortfall();
-    }
-    Plant plant(spec, std::move(flux));
-
-    // Controller tuning from the nominal motor: IMC current loops (closed loop first order at the
-    // bandwidth), speed PI placing a double pole at the speed bandwidth.
-    const double alpha_c = 2.0 * std::numbers::pi * c.current_bandwidth;
-    const double kp_d = alpha_c * motor.ld, kp_q = alpha_c * motor.lq, ki_i = alpha_c * motor.rs;
-    const double alpha_s = 2.0 * std::numbers::pi * c.speed_bandwidth;
-    const double torque_constant = 1.5 * motor.pole_pairs * motor.psi_f;
-    const double inertia = spec.mechanics.total_inertia();
-    const double kp_w = 2.0 * alpha_s * inertia / torque_constant, ki_w = alpha_s * alpha_s * inertia / torque_constant;
-    const double voltage_limit = c.dc_voltage / std::numbers::sqrt3;
-    const double p = motor.pole_pairs;
-
-    // Delay line of the inverter: commands and true angles, one entry per integration step.
-    const auto delay_steps = static_cast<std::size_t>(std::llround(delay / h));
-    std::vector<Complex> command_history(delay_steps + 1);
-    std::vector<double> angle_history(delay_steps + 1);
-    std::int64_t step_index = 0;
+    std::unique_ptr<ControlledPlant> plant;
+    if (spec.device) plant = make_device_plant(spec);
+    else plant = std::make_unique<AveragedPlant>(spec);
+    FieldOrientedController controller(motor, spec.mechanics, c);
+    const Complex log_offset = plant->logged_voltage_offset();
 
     Rng rng(spec.seed);
     LowPass f_id(spec.logging.filter_cutoff, ts), f_iq(spec.logging.filter_cutoff, ts), f_ud(spec.logging.filter_cutoff, ts),
@@ -212,10 +292,6 @@ SimulationResult simulate(const DriveSimulation& spec) {
     }
     m.segment.resize(total_samples);
 
-    PlantState x = plant.rest_state();
-    double integral_d = 0.0, integral_q = 0.0, integral_w = 0.0, position_error = 0.0;
-    double previous_angle = 0.0;
-    bool first_control = true;
     std::int64_t control_index = 0;
     Eigen::Index row = 0;
 
@@ -223,7 +299,6 @@ SimulationResult simulate(const DriveSimulation& spec) {
         const Segment& segment = spec.segments[seg];
         const auto settle_controls = static_cast<std::int64_t>(std::llround(segment.settle / ts));
         const std::int64_t controls = settle_controls + segment.samples * controls_per_log;
-        const double speed_ref_m = segment.speed_rpm * 2.0 * std::numbers::pi / 60.0;
         // Segments sharing a label share its index (labels are distinct, in order of first use).
         const auto label_it = std::find(m.segment_labels.begin(), m.segment_labels.end(), segment.label);
         const int label_index = static_cast<int>(label_it - m.segment_labels.begin());
@@ -232,48 +307,11 @@ SimulationResult simulate(const DriveSimulation& spec) {
 
         for (std::int64_t j = 0; j < controls; ++j, ++control_index) {
             const double t = static_cast<double>(control_index) * ts;
-            // Sensors: two phase currents and the encoder angle, as the controller sees them.
-            const double theta_true = plant.electrical_angle(x);
-            const double theta_c = wrap_angle(theta_true + angle_offset);
-            const auto phase = inverse_clarke(inverse_park(plant.current(x, t), theta_true));
-            double i_a = phase[0], i_b = phase[1];
-            if (spec.noise.current > 0) {
-                i_a += spec.noise.current * rng.normal();
-                i_b += spec.noise.current * rng.normal();
-            }
-            const Complex i_c = park(Complex{i_a, (i_a + 2.0 * i_b) / std::numbers::sqrt3} + sensor_offset, theta_c);
-            double omega_c = first_control ? p * x.omega_m : wrap_angle(theta_c - previous_angle) / ts;
+            const SensorReading reading = plant->sense(t, rng);
+            const Complex i_c = park(reading.current, reading.angle);
+            double omega_c = controller.estimate_speed(reading.angle, reading.true_speed);
             if (spec.noise.speed > 0) omega_c += spec.noise.speed * rng.normal();
-            previous_angle = theta_c;
-            first_control = false;
-
-            // Position (optional) and speed loops give the q-current reference.
-            double speed_ref = speed_ref_m;
-            if (c.position_gain > 0) {
-                position_error += (speed_ref_m - omega_c / p) * ts;
-                speed_ref += c.position_gain * position_error;
-            }
-            const double speed_error = speed_ref - omega_c / p;
-            const double i_d_ref = std::clamp(segment.i_d, -c.current_limit, c.current_limit);
-            const double i_q_max = std::sqrt(std::max(c.current_limit * c.current_limit - i_d_ref * i_d_ref, 0.0));
-            double i_q_ref = kp_w * speed_error + integral_w;
-            if (std::abs(i_q_ref) > i_q_max) {
-                i_q_ref = std::copysign(i_q_max, i_q_ref);
-                if (speed_error * i_q_ref < 0) integral_w += ki_w * ts * speed_error;  // only unwinding
-            } else {
-                integral_w += ki_w * ts * speed_error;
-            }
-
-            // Current loops with decoupling; integrate only while the voltage is not limited.
-            const double e_d = i_d_ref - i_c.real(), e_q = i_q_ref - i_c.imag();
-            Complex u_ref{kp_d * e_d + integral_d - omega_c * motor.lq * i_c.imag(),
-                          kp_q * e_q + integral_q + omega_c * (motor.ld * i_c.real() + motor.psi_f)};
-            if (std::abs(u_ref) > voltage_limit) {
-                u_ref *= voltage_limit / std::abs(u_ref);
-            } else {
-                integral_d += ki_i * ts * e_d;
-                integral_q += ki_i * ts * e_q;
-            }
+            const Complex u_ref = controller.update(segment, i_c, omega_c);
 
             // Logging: filtered at the control rate, sampled every logging period inside the window.
             const double id_f = f_id.update(i_c.real()), iq_f = f_iq.update(i_c.imag());
@@ -284,38 +322,26 @@ SimulationResult simulate(const DriveSimulation& spec) {
                 m.i_q[row] = iq_f;
                 m.u_d[row] = ud_f + (spec.noise.voltage > 0 ? spec.noise.voltage * rng.normal() : 0.0);
                 m.u_q[row] = uq_f + (spec.noise.voltage > 0 ? spec.noise.voltage * rng.normal() : 0.0);
+                if (log_offset != Complex{}) {
+                    m.u_d[row] += log_offset.real();
+                    m.u_q[row] += log_offset.imag();
+                }
                 m.omega_e[row] = w_f;
                 if (m.t) (*m.t)[row] = t;
-                if (m.theta_e) (*m.theta_e)[row] = theta_c;
+                if (m.theta_e) (*m.theta_e)[row] = reading.angle;
                 if (m.temp_winding) {
-                    (*m.temp_winding)[row] = spec.temp_winding.at(t) + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);
-                    (*m.temp_magnet)[row] = spec.temp_magnet.at(t) + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);
+                    const Temperatures temperatures = plant->temperatures(t);
+                    (*m.temp_winding)[row] = temperatures.winding + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);
+                    (*m.temp_magnet)[row] = temperatures.magnet + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);
                 }
                 m.segment[row] = label_index;
                 ++row;
             }
-
-            // Inverter and plant: the command (less any shortfall) goes through the delay line and is
-            // applied in the controller's rotating frame, which leads the rotor frame by the offset.
-            const Complex command = u_ref - shortfall;
-            for (std::int64_t n = 0; n < steps_per_control; ++n, ++step_index) {
-                const double t_step = t + static_cast<double>(n) * h;
-                const double theta_now = plant.electrical_angle(x);
-                const auto slot = static_cast<std::size_t>(step_index) % command_history.size();
-                command_history[slot] = command;
-                angle_history[slot] = theta_now;
-                Complex applied;
-                if (step_index >= static_cast<std::int64_t>(delay_steps)) {
-                    const auto old = static_cast<std::size_t>(step_index - static_cast<std::int64_t>(delay_steps)) % command_history.size();
-                    const double lag = wrap_angle(theta_now - angle_history[old]);
-                    applied = std::polar(1.0, angle_offset - lag) * command_history[old];
-                }
-                plant.step(x, t_step, h, applied, segment.load_torque);
-            }
+            plant->run_control_period(t, u_ref, reading, omega_c, segment);
         }
     }
     result.simulated_time = static_cast<double>(control_index) * ts;
-    result.integration_steps = step_index;
+    result.integration_steps = plant->integration_steps();
     return result;
 }
 

@@ -3,15 +3,18 @@
 // a speed PI loop and an optional position loop, the harmonic reducer's load reflected to the motor,
 // a fixed-step RK4 plant much finer than the control period, and a log of what a real drive logs:
 // the controller's voltage references and its measured currents, speed and angle. Physical effects
-// (effects/) act on the plant and the sensors only; the controller knows the nominal motor.
-// docs/pmsm.md describes loops, tuning, integrator and logging.
+// (effects/) act on the plant and the sensors only; the controller knows the nominal motor. With
+// `device` set, the plant is instead the device plant (device_plant.hpp), written from the physics of
+// each device, and no effect may be given. docs/pmsm.md describes loops, tuning, integrator and logging.
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "problems/pmsm/device_settings.hpp"
 #include "problems/pmsm/effects/effect.hpp"
 #include "problems/pmsm/machine.hpp"
 #include "problems/pmsm/measurement.hpp"
@@ -77,7 +80,8 @@ struct DriveSimulation {
     std::uint64_t seed = 0;
     TemperatureProfile temp_winding, temp_magnet;
     std::vector<Segment> segments;
-    std::vector<std::unique_ptr<Effect>> effects;
+    std::vector<std::unique_ptr<Effect>> effects;  // averaged plant only
+    std::optional<DeviceSettings> device;          // set: the device plant; the temperature profiles are unused
     std::filesystem::path base_directory;  // relative paths of effects (flux maps) resolve here
 };
 
@@ -95,8 +99,15 @@ struct SimulationResult {
     std::int64_t integration_steps = 0;
 };
 
-// Runs the whole profile. Throws std::invalid_argument on inconsistent settings (e.g. an
-// integration step that does not divide the control period).
+// A copy of `base` (motor, mechanics, control, logging, noise, segments, base directory) on the device
+// plant with `device` and noise seed `seed`: what a study varying device settings over seeds runs,
+// one copy per simulation. `base`'s effects and temperature profiles are not copied (the device
+// plant has its own).
+DriveSimulation with_device(const DriveSimulation& base, const DeviceSettings& device, std::uint64_t seed);
+
+// Runs the whole profile on the plant it selects. Throws std::invalid_argument on inconsistent
+// settings (e.g. an integration step that does not divide the control period, effects with a device
+// plant).
 SimulationResult simulate(const DriveSimulation& spec);
 
 }  // namespace mhb::pmsm

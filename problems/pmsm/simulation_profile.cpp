@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <set>
 
 #include <fmt/format.h>
@@ -202,6 +203,179 @@ Segment read_segment(const std::string& file, const toml::node& node, std::size_
     return s;
 }
 
+
+// The [plant] table: model = "averaged" (the default: the effect library acts on the averaged dq
+// plant) or "device" with the device tables below; docs/pmsm.md, "The device plant".
+const toml::table& device_subtable(const std::string& file, const toml::table& plant, std::string_view key) {
+    static const toml::table empty;
+    const toml::node* n = plant.get(key);
+    if (!n) return empty;
+    if (!n->is_table()) throw InputError(file, line_of(*n), "plant." + std::string(key), "expects a table");
+    return *n->as_table();
+}
+
+long line_of_key(const toml::table& t, std::string_view key, long fallback) {
+    const toml::node* n = t.get(key);
+    return n ? line_of(*n) : fallback;
+}
+
+InverterDevice read_inverter(const std::string& file, const toml::table& plant, double control_period) {
+    const auto& t = device_subtable(file, plant, "inverter");
+    TableReader r(file, t, "plant.inverter", 0);
+    r.allow_only({"pwm_frequency", "dead_time", "switch_drop", "diode_drop", "switch_resistance", "diode_resistance",
+                  "delay_compensation"});
+    InverterDevice inv;
+    inv.pwm_frequency = r.number("pwm_frequency", inv.pwm_frequency, 0.0, 1e7, true);
+    inv.dead_time = r.number("dead_time", inv.dead_time, 0.0, 1e-3);
+    inv.switch_drop = r.number("switch_drop", inv.switch_drop, 0.0, 100.0);
+    inv.diode_drop = r.number("diode_drop", inv.diode_drop, 0.0, 100.0);
+    inv.switch_resistance = r.number("switch_resistance", inv.switch_resistance, 0.0, 1e3);
+    inv.diode_resistance = r.number("diode_resistance", inv.diode_resistance, 0.0, 1e3);
+    inv.delay_compensation = r.boolean("delay_compensation", inv.delay_compensation);
+    // The currents are sampled at a carrier peak once per control period, so whole carriers must
+    // tile it; the dead time must leave every pulse its two edges.
+    const double carriers = control_period * inv.pwm_frequency;
+    if (std::llround(carriers) < 1 || std::abs(carriers - static_cast<double>(std::llround(carriers))) > 1e-6 * carriers)
+        throw InputError(file, line_of_key(t, "pwm_frequency", line_of_key(plant, "inverter", 0)), "plant.inverter.pwm_frequency",
+                         fmt::format("pwm_frequency x drive.control_period = {} must be a whole number >= 1", carriers));
+    if (inv.dead_time >= 0.25 / inv.pwm_frequency)
+        throw InputError(file, line_of_key(t, "dead_time", 0), "plant.inverter.dead_time",
+                         fmt::format("must be shorter than a quarter of the carrier period ({} s)", 0.25 / inv.pwm_frequency));
+    return inv;
+}
+
+std::vector<FluxHarmonic> read_flux_harmonics(const std::string& file, const toml::table& plant) {
+    const auto& t = device_subtable(file, plant, "rotor_flux");
+    TableReader r(file, t, "plant.rotor_flux", 0);
+    r.allow_only({"harmonics"});
+    std::vector<FluxHarmonic> harmonics;
+    const toml::node* n = t.get("harmonics");
+    if (!n) return harmonics;
+    const toml::array* list = n->as_array();
+    if (!list) throw InputError(file, line_of(*n), "plant.rotor_flux.harmonics", "expects a list of {order, amplitude, phase} tables");
+    for (std::size_t k = 0; k < list->size(); ++k) {
+        const toml::node& item = (*list)[k];
+        const std::string field = fmt::format("plant.rotor_flux.harmonics[{}]", k + 1);
+        if (!item.is_table()) throw InputError(file, line_of(item), field, "expects a table {order = 5, amplitude = 0.01, phase = 0.0}");
+        TableReader h(file, *item.as_table(), field, line_of(item));
+        h.allow_only({"order", "amplitude", "phase"});
+        if (!item.as_table()->get("order")) throw InputError(file, line_of(item), field + ".order", "is required");
+        FluxHarmonic harmonic;
+        harmonic.order = static_cast<int>(h.integer("order", 5, 5, 99));
+        if (harmonic.order % 2 == 0 || harmonic.order % 3 == 0)
+            throw InputError(file, line_of(*item.as_table()->get("order")), field + ".order",
+                             "must be odd and not a multiple of 3 (even and triplen harmonics do not reach a star-connected machine's currents)");
+        harmonic.amplitude = h.number("amplitude", 0.0, 0.0, 0.5);
+        harmonic.phase = h.number("phase", 0.0, -std::numbers::pi, std::numbers::pi);
+        harmonics.push_back(harmonic);
+    }
+    return harmonics;
+}
+
+ThermalNetwork read_thermal_network(const std::string& file, const toml::table& plant) {
+    ThermalNetwork n;
+    if (!plant.get("thermal")) return n;
+    TableReader r(file, device_subtable(file, plant, "thermal"), "plant.thermal", 0);
+    r.allow_only({"enabled", "winding_capacity", "magnet_capacity", "winding_to_magnet", "winding_to_ambient",
+                  "magnet_to_ambient", "ambient", "initial_winding", "initial_magnet", "iron_loss", "alpha_magnet"});
+    n.enabled = r.boolean("enabled", true);
+    n.winding_capacity = r.number("winding_capacity", n.winding_capacity, 0.0, 1e9, true);
+    n.magnet_capacity = r.number("magnet_capacity", n.magnet_capacity, 0.0, 1e9, true);
+    n.winding_to_magnet = r.number("winding_to_magnet", n.winding_to_magnet, 0.0, 1e9, true);
+    n.winding_to_ambient = r.number("winding_to_ambient", n.winding_to_ambient, 0.0, 1e9, true);
+    n.magnet_to_ambient = r.number("magnet_to_ambient", n.magnet_to_ambient, 0.0, 1e9, true);
+    n.ambient = r.number("ambient", n.ambient, -273.15, 1000.0);
+    n.initial_winding = r.number("initial_winding", n.ambient, -273.15, 1000.0);
+    n.initial_magnet = r.number("initial_magnet", n.ambient, -273.15, 1000.0);
+    n.iron_loss = r.number("iron_loss", n.iron_loss, 0.0, 1e6);
+    n.alpha_magnet = r.number("alpha_magnet", n.alpha_magnet, -0.01, 0.01);
+    return n;
+}
+
+// Reads [plant]; with model = "device" the effect library and prescribed temperatures are refused
+// (one plant or the other).
+std::optional<DeviceSettings> read_plant(const std::string& file, const toml::table& root, double control_period) {
+    const toml::node* node = root.get("plant");
+    if (!node) return std::nullopt;
+    if (!node->is_table()) throw InputError(file, line_of(*node), "plant", "expects a table");
+    const toml::table& plant = *node->as_table();
+    std::string model = "averaged";
+    if (const toml::node* m = plant.get("model")) {
+        if (!m->is_string() || (m->value<std::string>() != "averaged" && m->value<std::string>() != "device"))
+            throw InputError(file, line_of(*m), "plant.model", "expects \"averaged\" or \"device\"");
+        model = m->value<std::string>().value();
+    }
+    TableReader top(file, plant, "plant", line_of(*node));
+    if (model == "averaged") {
+        top.allow_only({"model"});
+        return std::nullopt;
+    }
+    top.allow_only({"model", "inverter", "encoder", "rotor_flux", "saturation", "current_sensors", "thermal", "logging_offset"});
+    for (const char* library : {"effects", "temperature"})
+        if (const toml::node* n = root.get(library))
+            throw InputError(file, line_of(*n), library,
+                             std::string(library) == "effects"
+                                 ? "library effects act on the averaged plant; with plant.model = \"device\" the drive's "
+                                   "imperfections are device settings ([plant.inverter], [plant.encoder], ...)"
+                                 : "with plant.model = \"device\" the temperatures come from [plant.thermal] (its "
+                                   "network, or initial_winding/initial_magnet held with enabled = false)");
+    DeviceSettings d;
+    d.inverter = read_inverter(file, plant, control_period);
+    {
+        TableReader r(file, device_subtable(file, plant, "encoder"), "plant.encoder", 0);
+        r.allow_only({"lines", "offset"});
+        d.encoder.lines = r.integer("lines", 0, 0, 1'000'000'000);
+        d.encoder.offset = r.number("offset", 0.0, -std::numbers::pi, std::numbers::pi);
+    }
+    d.rotor_flux.harmonics = read_flux_harmonics(file, plant);
+    {
+        TableReader r(file, device_subtable(file, plant, "saturation"), "plant.saturation", 0);
+        r.allow_only({"saturation_current"});
+        d.saturation.saturation_current = r.number("saturation_current", 0.0, 0.0, 1e6);
+    }
+    {
+        TableReader r(file, device_subtable(file, plant, "current_sensors"), "plant.current_sensors", 0);
+        r.allow_only({"offset_a", "offset_b", "gain_a", "gain_b"});
+        d.current_sensors.offset_a = r.number("offset_a", 0.0, -1e3, 1e3);
+        d.current_sensors.offset_b = r.number("offset_b", 0.0, -1e3, 1e3);
+        d.current_sensors.gain_a = r.number("gain_a", 1.0, 0.0, 10.0, true);
+        d.current_sensors.gain_b = r.number("gain_b", 1.0, 0.0, 10.0, true);
+    }
+    d.thermal = read_thermal_network(file, plant);
+    {
+        TableReader r(file, device_subtable(file, plant, "logging_offset"), "plant.logging_offset", 0);
+        r.allow_only({"u_d", "u_q"});
+        d.logging_offset.u_d = r.number("u_d", 0.0, -1e3, 1e3);
+        d.logging_offset.u_q = r.number("u_q", 0.0, -1e3, 1e3);
+    }
+    return d;
+}
+
+// The device settings as the sidecar records them (the truth of a device-plant record).
+nlohmann::ordered_json device_sidecar(const DeviceSettings& d) {
+    using json = nlohmann::ordered_json;
+    json harmonics = json::array();
+    for (const auto& h : d.rotor_flux.harmonics) harmonics.push_back({{"order", h.order}, {"amplitude", h.amplitude}, {"phase", h.phase}});
+    const auto& inv = d.inverter;
+    const auto& th = d.thermal;
+    const auto& cs = d.current_sensors;
+    return {{"model", "device"},
+            {"inverter", {{"pwm_frequency", inv.pwm_frequency}, {"dead_time", inv.dead_time}, {"switch_drop", inv.switch_drop},
+                          {"diode_drop", inv.diode_drop}, {"switch_resistance", inv.switch_resistance},
+                          {"diode_resistance", inv.diode_resistance}, {"delay_compensation", inv.delay_compensation}}},
+            {"encoder", {{"lines", d.encoder.lines}, {"offset", d.encoder.offset}}},
+            {"rotor_flux", {{"harmonics", harmonics}}},
+            {"saturation", {{"saturation_current", d.saturation.saturation_current}}},
+            {"current_sensors", {{"offset_a", cs.offset_a}, {"offset_b", cs.offset_b}, {"gain_a", cs.gain_a}, {"gain_b", cs.gain_b}}},
+            {"thermal", {{"enabled", th.enabled}, {"winding_capacity", th.winding_capacity}, {"magnet_capacity", th.magnet_capacity},
+                         {"winding_to_magnet", th.winding_to_magnet}, {"winding_to_ambient", th.winding_to_ambient},
+                         {"magnet_to_ambient", th.magnet_to_ambient}, {"ambient", th.ambient},
+                         {"initial_winding", th.initial_winding}, {"initial_magnet", th.initial_magnet},
+                         {"iron_loss", th.iron_loss}, {"alpha_copper", copper_temperature_coefficient},
+                         {"alpha_magnet", th.alpha_magnet}}},
+            {"logging_offset", {{"u_d", d.logging_offset.u_d}, {"u_q", d.logging_offset.u_q}}}};
+}
+
 }  // namespace
 
 DriveSimulation parse_simulation_profile(const std::string& text, const std::string& source,
@@ -214,7 +388,7 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
     }
     const std::string& file = source;
     TableReader top(file, root, "", 0);
-    top.allow_only({"motor", "mechanics", "drive", "logging", "noise", "temperature", "effects", "segment"});
+    top.allow_only({"motor", "mechanics", "drive", "logging", "noise", "temperature", "effects", "plant", "segment"});
 
     DriveSimulation sim;
     sim.base_directory = base_directory;
@@ -274,6 +448,7 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
           step_line ? "drive.integration_step" : "drive.control_period", "control_period / integration_step");
     whole(sim.logging.period, sim.control.control_period, period_line ? period_line : control_line,
           period_line ? "logging.period" : "drive.control_period", "logging.period / control_period");
+    sim.device = read_plant(file, root, sim.control.control_period);
     {
         TableReader r(file, subtable(file, root, "noise"), "noise", 0);
         r.allow_only({"seed", "current", "speed", "voltage", "temperature"});
@@ -300,7 +475,8 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
     }
     {
         TableReader r(file, subtable(file, root, "logging"), "logging", 0);
-        sim.logging.temperatures = r.boolean("temperatures", has_temperature || thermal);
+        const bool device_thermal = sim.device && sim.device->thermal.enabled;
+        sim.logging.temperatures = r.boolean("temperatures", has_temperature || thermal || device_thermal);
     }
     const toml::node* segments = root.get("segment");
     if (!segments) throw InputError(file, 0, "segment", "a profile needs at least one [[segment]]");
@@ -342,6 +518,8 @@ nlohmann::ordered_json simulation_sidecar(const DriveSimulation& spec, const Sim
         if (e->settings().contains("flux_map")) flux_map = e->settings().text("flux_map");
     if (flux_map.empty()) {
         j["true_parameters"] = {{"Rs", spec.motor.rs}, {"Ld", spec.motor.ld}, {"Lq", spec.motor.lq}, {"psi_f", spec.motor.psi_f}};
+        if (spec.device && spec.device->saturation.saturation_current > 0)
+            j["true_parameters_note"] = "the plant's iron saturates (plant.saturation): Ld and Lq are its small-current inductances";
     } else {
         j["plant_flux_map"] = flux_map;
         j["true_parameters_note"] = "the plant is a measured flux map: Ld, Lq and psi_f have no single true value; "
@@ -378,6 +556,7 @@ nlohmann::ordered_json simulation_sidecar(const DriveSimulation& spec, const Sim
         effects.push_back({{"name", e->name()}, {"parameters", parameters}});
     }
     j["effects"] = effects;
+    if (spec.device) j["plant"] = device_sidecar(*spec.device);
     json segments = json::array();
     for (std::size_t k = 0; k < spec.segments.size(); ++k) {
         const auto& s = spec.segments[k];

@@ -82,4 +82,27 @@ void BM_PmsmSimulatePaperProfile(benchmark::State& state) {
 }
 BENCHMARK(BM_PmsmSimulatePaperProfile)->Unit(benchmark::kMillisecond);
 
+// The device plant on its diagnosis profile (9 operating points, 4.24 s of drive): every carrier
+// period split at its switching instants, RK4 across each interval. Arg 1: the same profile with
+// dead time, magnet harmonics and the thermal network on (more intervals, per-phase harmonic flux).
+void BM_PmsmSimulateDevicePlant(benchmark::State& state) {
+    auto spec = read_simulation_profile(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "device_diagnosis_profile.toml");
+    if (state.range(0) == 1) {
+        spec.device->inverter.dead_time = 1e-6;
+        spec.device->rotor_flux.harmonics = {{5, 0.01, 0.0}, {7, 0.005, 0.0}};
+        spec.device->thermal.enabled = true;
+    }
+    std::int64_t steps = 0;
+    double simulated = 0.0;
+    for (auto _ : state) {
+        const auto result = simulate(spec);
+        steps += result.integration_steps;
+        simulated += result.simulated_time;
+        benchmark::DoNotOptimize(result.data.u_q.data());
+    }
+    state.counters["rk4_steps_per_second"] = benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
+    state.counters["simulated_seconds_per_second"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_PmsmSimulateDevicePlant)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 }  // namespace
