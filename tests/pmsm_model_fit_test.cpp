@@ -184,7 +184,7 @@ TEST_CASE("a fixed parameter is held at its value and the others are fitted", "[
 
 TEST_CASE("the search box is the effect's plausible range and a fit pinned at its end says so", "[pmsm][model_fit]") {
     // No magnet heating in the plant, but temperatures logged: psi_thermal wants alpha = 0, outside
-    // its range [-0.0013, -0.0002], and ends at the range's upper end.
+    // its range [-0.0025, -0.0002], and ends at the range's upper end.
     const Measurement& data = diagnosis_data({});
     const auto fit = fit_model(data, parse_model_spec("base+psi_thermal"), FitOptions{});
     const auto j = fit.index_of("psi_thermal.alpha");

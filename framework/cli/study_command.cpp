@@ -18,7 +18,7 @@ namespace mhb::cli {
 namespace {
 
 struct StudyOptions {
-    std::string file, out;
+    std::string file, out, keep_data, only;
     int threads = 0;
     std::int64_t seeds = 0;
     bool quiet = false;
@@ -46,10 +46,19 @@ const bool registered = register_command("study", [](CLI::App& app) {
     cmd->add_option("--threads", o->threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
     cmd->add_option("--seeds", o->seeds, "use only the first N seeds of the study file")->check(CLI::Range(1, 100000));
     cmd->add_flag("--quiet", o->quiet, "do not print progress and the summary");
+    cmd->add_option("--only", o->only, "run only the cases whose label contains this text (e.g. deadtime, clean)");
+    cmd->add_option("--keep-data", o->keep_data, "write each drive's measurement CSV and sidecar into this directory, to diagnose a case by hand");
     return std::function<int()>([o] {
         auto spec = pmsm::read_study(o->file);
         if (o->seeds > 0 && static_cast<std::size_t>(o->seeds) < spec.seeds.size()) spec.seeds.resize(static_cast<std::size_t>(o->seeds));
         if (!o->out.empty()) spec.output = o->out;
+        spec.only = o->only;
+        spec.keep_data = o->keep_data;
+        if (!spec.keep_data.empty()) {
+            std::error_code created;
+            std::filesystem::create_directories(spec.keep_data, created);
+            if (created) throw InputError(spec.keep_data.string(), 0, "--keep-data", "cannot create the directory: " + created.message());
+        }
         std::optional<tbb::global_control> limit;
         if (o->threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(o->threads));
         std::error_code ec;

@@ -43,17 +43,17 @@ std::string leaf_text(const toml::node& n) {
     return toml_text(wrapper);
 }
 
-// Merges `from` into `into`, table by table. A leaf that `into` already holds with another value is
-// a conflict: `conflict` names the dotted key (two imperfections of one case set it differently).
+// Merges `from` into `into`, table by table; `from` wins. A leaf that `into` already holds with
+// another value is reported to `conflict` (when given) by its dotted key: two imperfections of one
+// case that set it differently.
 void merge(toml::table& into, const toml::table& from, const std::string& prefix, const std::function<void(const std::string&)>& conflict) {
     for (auto&& [key, node] : from) {
         const std::string dotted = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
         toml::node* existing = into.get(key);
         if (existing && existing->is_table() && node.is_table()) {
             merge(*existing->as_table(), *node.as_table(), dotted, conflict);
-        } else if (existing && conflict && leaf_text(*existing) != leaf_text(node)) {
-            conflict(dotted);
         } else {
+            if (existing && conflict && leaf_text(*existing) != leaf_text(node)) conflict(dotted);
             into.insert_or_assign(key, node);
         }
     }
@@ -136,11 +136,11 @@ StudySpec read_study(const std::filesystem::path& path) {
     } catch (const toml::parse_error& e) {
         throw InputError(file, static_cast<long>(e.source().begin.line), "", std::string(e.description()));
     }
-    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside"};
+    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside", "together"};
     for (auto&& [key, node] : root)
         if (!allowed.count(std::string(key.str())))
             throw InputError(file, line_of(node), std::string(key.str()),
-                             "unknown key (allowed: name, description, profile, model, seeds, pairs, triples, output, effect, outside)");
+                             "unknown key (allowed: name, description, profile, model, seeds, pairs, triples, output, effect, outside, together)");
     StudySpec spec;
     spec.file = path;
     const auto directory = path.parent_path();
@@ -176,7 +176,7 @@ StudySpec read_study(const std::filesystem::path& path) {
     }
 
     std::set<std::string> names;
-    each_table(file, root, "effect", {"name", "clear", "weak"}, [&](const std::string& field, const toml::table& t) {
+    each_table(file, root, "effect", {"name", "clear", "weak", "in_pairs"}, [&](const std::string& field, const toml::table& t) {
         StudyEffect e;
         e.line = line_of(t);
         const toml::node& name = required(file, t, "name", field);
@@ -188,7 +188,11 @@ StudySpec read_study(const std::filesystem::path& path) {
         }
         if (!names.insert(e.name).second) throw InputError(file, line_of(name), field + ".name", "'" + e.name + "' is listed twice");
         e.clear = toml_text(settings_table(file, t, "clear", field));
-        e.weak = toml_text(settings_table(file, t, "weak", field));
+        if (t.get("weak")) e.weak = toml_text(settings_table(file, t, "weak", field));
+        if (const auto* in_pairs = t.get("in_pairs")) {
+            if (!in_pairs->is_boolean()) throw InputError(file, line_of(*in_pairs), field + ".in_pairs", "expects true or false");
+            e.in_combinations = in_pairs->value<bool>().value();
+        }
         spec.effects.push_back(std::move(e));
     });
     each_table(file, root, "outside", {"name", "settings"}, [&](const std::string& field, const toml::table& t) {
@@ -197,6 +201,15 @@ StudySpec read_study(const std::filesystem::path& path) {
         o.name = string_of(file, required(file, t, "name", field), field + ".name");
         o.settings = toml_text(settings_table(file, t, "settings", field));
         spec.outside.push_back(std::move(o));
+    });
+    each_table(file, root, "together", {"effects", "settings"}, [&](const std::string& field, const toml::table& t) {
+        StudyTogether g;
+        g.line = line_of(t);
+        const toml::node& effects = required(file, t, "effects", field);
+        const auto* list = effects.as_array();
+        g.effects = name_list(file, effects, field + ".effects", list ? std::max<std::size_t>(list->size(), 2) : 2, names);
+        g.settings = toml_text(settings_table(file, t, "settings", field));
+        spec.together.push_back(std::move(g));
     });
     if (const auto* pairs = root.get("pairs")) {
         if (pairs->is_string() && pairs->value<std::string>() == "all") {
@@ -220,30 +233,44 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
     std::map<std::string, const StudyEffect*> by_name;
     for (const auto& e : spec.effects) by_name[e.name] = &e;
     const std::string file = spec.file.string();
-    // The settings of several imperfections, merged; two that set one key differently cannot be
-    // simulated together.
+    // The settings of several imperfections, merged. Two that set one key differently cannot be
+    // simulated together unless a [[together]] table for a subset of them settles that key.
     auto combine = [&](const std::vector<std::pair<std::string, std::string>>& parts) {
         toml::table merged;
+        std::map<std::string, std::string> conflicts;  // dotted key -> "a and b"
         std::string first;
         for (const auto& [name, text] : parts) {
-            merge(merged, parse_settings(text, file), "", [&](const std::string& key) {
-                throw InputError(file, by_name.count(name) ? by_name[name]->line : 0, key,
-                                 fmt::format("set differently by {} and {}: they cannot be simulated together", first, name));
-            });
+            merge(merged, parse_settings(text, file), "", [&](const std::string& key) { conflicts.emplace(key, first + " and " + name); });
             if (first.empty()) first = name;
+        }
+        for (const auto& g : spec.together) {
+            const bool applies = std::all_of(g.effects.begin(), g.effects.end(), [&](const std::string& e) {
+                return std::any_of(parts.begin(), parts.end(), [&](const auto& p) { return p.first == e; });
+            });
+            if (!applies) continue;
+            const auto settled = parse_settings(g.settings, file);
+            merge(merged, settled, "", {});
+            for (auto it = conflicts.begin(); it != conflicts.end();)
+                it = settled.at_path(it->first) ? conflicts.erase(it) : std::next(it);
+        }
+        if (!conflicts.empty()) {
+            const auto& [key, who] = *conflicts.begin();
+            const std::string second = who.substr(who.rfind(' ') + 1);
+            throw InputError(file, by_name.count(second) ? by_name[second]->line : 0, key,
+                             fmt::format("set differently by {}: they cannot be simulated together (a [[together]] table for them can settle it)", who));
         }
         return toml_text(merged);
     };
     std::vector<StudyCase> cases;
     cases.push_back({"clean", "clean", "", {}, false, ""});
-    for (const char* magnitude : {"clear", "weak"})
-        for (const auto& e : spec.effects)
-            cases.push_back({e.name, "single", magnitude, {e.name}, false,
-                             combine({{e.name, std::string(magnitude) == "clear" ? e.clear : e.weak}})});
+    for (const auto& e : spec.effects) cases.push_back({e.name, "single", "clear", {e.name}, false, combine({{e.name, e.clear}})});
+    for (const auto& e : spec.effects)
+        if (!e.weak.empty()) cases.push_back({e.name, "single", "weak", {e.name}, false, combine({{e.name, e.weak}})});
     std::vector<std::vector<std::string>> pairs = spec.pairs;
     if (spec.all_pairs)
         for (std::size_t a = 0; a < spec.effects.size(); ++a)
             for (std::size_t b = a + 1; b < spec.effects.size(); ++b) {
+                if (!spec.effects[a].in_combinations || !spec.effects[b].in_combinations) continue;
                 std::vector<std::string> p{spec.effects[a].name, spec.effects[b].name};
                 std::sort(p.begin(), p.end());
                 pairs.push_back(p);
@@ -256,6 +283,7 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
     for (const auto& p : pairs) add_combination(p, "pair");
     for (const auto& t : spec.triples) add_combination(t, "triple");
     for (const auto& o : spec.outside) cases.push_back({"outside:" + o.name, "outside", "clear", {}, true, combine({{o.name, o.settings}})});
+    if (!spec.only.empty()) std::erase_if(cases, [&](const StudyCase& c) { return c.label.find(spec.only) == std::string::npos; });
     return cases;
 }
 
@@ -294,6 +322,11 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         const std::string source = fmt::format("{} (case {}, seed {})", spec.profile.string(), c.label, r.seed);
         const DriveSimulation sim = parse_simulation_profile(case_profile(spec, c, r.seed), source, spec.profile.parent_path());
         SimulationResult result = simulate(sim);
+        if (!spec.keep_data.empty()) {
+            std::string name;
+            for (char ch : c.label + "_" + c.magnitude) name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' ? ch : '-';
+            write_simulation(spec.keep_data / fmt::format("{}_seed{}.csv", name, r.seed), sim, result, source);
+        }
         result.data.source = source;
         const Diagnosis d = diagnose(result.data, model, options);
         r.recommended = d.recommended.text();

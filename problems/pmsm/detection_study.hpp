@@ -25,13 +25,23 @@ namespace mhb::pmsm {
 
 struct StudyEffect {
     std::string name;            // the library effect the diagnosis should recommend
-    std::string clear, weak;     // profile settings, TOML text of nested tables
+    std::string clear, weak;     // profile settings, TOML text of nested tables (weak empty: no near-limit case)
+    bool in_combinations = true; // also in "all" pairs
     long line = 0;               // in the study file
 };
 
 struct StudyOutside {
     std::string name;            // an effect the library lacks
     std::string settings;        // profile settings, TOML text
+    long line = 0;
+};
+
+// Settings for a case that holds all of `effects` (two imperfections of one device, e.g. winding and
+// magnet heating in one thermal network): merged last, they settle what the effects' own settings
+// would set differently.
+struct StudyTogether {
+    std::vector<std::string> effects;  // sorted
+    std::string settings;
     long line = 0;
 };
 
@@ -46,7 +56,10 @@ struct StudySpec {
     std::vector<std::vector<std::string>> pairs;    // when not all
     std::vector<std::vector<std::string>> triples;
     std::vector<StudyOutside> outside;
+    std::vector<StudyTogether> together;
     std::filesystem::path output;      // resolved against the study file's directory
+    std::filesystem::path keep_data;   // when set, each drive's measurement is written here (CASE_seedN.csv and sidecar)
+    std::string only;                  // when set, only cases whose label contains it
 };
 
 // Reads and checks a study file (InputError naming the file, line and field).

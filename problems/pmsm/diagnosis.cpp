@@ -714,7 +714,11 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
         const ModelFit current = s.steps.back().fit;
         std::vector<const ModelFit*> fits{&current};
         for (const auto& a : round) fits.push_back(&a.fit);
-        const NoiseEstimate noise = noise_of_best(data, fits);
+        // No overdispersion here: while two effects are missing, no single addition removes the
+        // structure of the other, and dividing by it would hide both. Structure that no library set
+        // explains is caught at the end, where the set must reach the noise floor.
+        NoiseEstimate noise = noise_of_best(data, fits);
+        noise.dispersion = 1.0;
         const double log_n = std::log(std::max(noise.effective_samples, 2.0));
         std::vector<std::pair<double, const Addition*>> supported;
         for (const auto& a : round) {
@@ -761,7 +765,9 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
     // Backward pruning, only of what the search added and only once two effects are there.
     while (s.steps.back().fit.spec.effects.size() >= spec.effects.size() + 2) {
         const ModelFit current = s.steps.back().fit;
-        const NoiseEstimate noise = noise_of_best(data, {&current});
+        // The criterion that added the effects, no overdispersion: the same evidence decides both ways.
+        NoiseEstimate noise = noise_of_best(data, {&current});
+        noise.dispersion = 1.0;
         const double log_n = std::log(std::max(noise.effective_samples, 2.0));
         std::optional<SearchStep> weakest;
         double weakest_bic = supported_bic;
@@ -922,14 +928,17 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
         return a.delta_bic < b.delta_bic;
     });
 
-    // The path, scored with the final noise estimate so that its steps compare with each other.
+    // The path, scored with the final noise estimate so that its steps compare with each other, and
+    // as the search decided (without overdispersion: the noise floor at the end is the safeguard).
     out.lack_of_fit = lack_of_fit(data, out.model, out.noise);
+    NoiseEstimate path_noise = out.noise;
+    path_noise.dispersion = 1.0;
     for (std::size_t k = 0; k < search.steps.size(); ++k) {
         PathStep step;
         step.fit = search.steps[k].fit;
         step.added = search.steps[k].added;
         step.delta_bic = k == 0 ? 0.0
-                                : -likelihood_ratio(search.steps[k - 1].fit, step.fit, out.noise) +
+                                : -likelihood_ratio(search.steps[k - 1].fit, step.fit, path_noise) +
                                       search.steps[k].added_parameters * log_n;
         step.explained = explained(step.fit);
         check_base(step.fit, step.implausible);

@@ -23,7 +23,7 @@ public:
 const bool registered = register_effect({
     "psi_thermal",
     "Magnet flux falling with magnet temperature (needs temp_magnet)",
-    {ParameterSpec::real("alpha", -0.001, -0.0013, -0.0002, "temperature coefficient of the remanence", "1/K")},
+    {ParameterSpec::real("alpha", -0.001, -0.0025, -0.0002, "temperature coefficient of the remanence", "1/K")},
     [](const ParameterSet& p) { return std::make_unique<PsiThermal>(p); },
 });
 
