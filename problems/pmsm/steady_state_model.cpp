@@ -11,6 +11,10 @@ Bounds base_parameter_bounds() {
 
 SteadyStateModel::SteadyStateModel(Measurement data, std::vector<std::unique_ptr<Effect>> effects)
     : data_(std::move(data)), effects_(std::move(effects)), names_(base_parameter_names) {
+    if (data_.theta_e) {
+        cos_theta_ = data_.theta_e->array().cos();
+        sin_theta_ = data_.theta_e->array().sin();
+    }
     const Bounds base = base_parameter_bounds();
     std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
     for (const auto& e : effects_) {
@@ -53,7 +57,11 @@ void SteadyStateModel::predict(const double* p, ModelState& s) const {
     s.i_d = data_.i_d.array();
     s.i_q = data_.i_q.array();
     s.omega = data_.omega_e.array();
-    if (data_.theta_e) s.theta = data_.theta_e->array();
+    if (data_.theta_e) {
+        s.theta = data_.theta_e->array();
+        s.cos_theta = cos_theta_;
+        s.sin_theta = sin_theta_;
+    }
     stage(ModelStage::SensorCurrents);
     stage(ModelStage::SensorAngle);
     s.rs.setConstant(p[0]);

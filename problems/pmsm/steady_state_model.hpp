@@ -41,6 +41,7 @@ public:
 
 private:
     Measurement data_;
+    Eigen::ArrayXd cos_theta_, sin_theta_;  // of the logged angle, once
     std::vector<std::unique_ptr<Effect>> effects_;
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
     std::vector<std::string> names_;

@@ -21,8 +21,8 @@ public:
     void model(ModelStage, const double* p, ModelState& s) const override {
         // The logged angle is the controller's, the frame the offset was measured in.
         const Complex o = alpha_beta_offset(p[0], p[1]);
-        s.i_d -= o.real() * s.theta.cos() + o.imag() * s.theta.sin();
-        s.i_q -= -o.real() * s.theta.sin() + o.imag() * s.theta.cos();
+        s.i_d -= o.real() * s.cos_theta + o.imag() * s.sin_theta;
+        s.i_q -= -o.real() * s.sin_theta + o.imag() * s.cos_theta;
     }
 };
 

@@ -14,12 +14,11 @@ double phase_sign(double i, double band) {
     return i > 0.0 ? 1.0 : (i < 0.0 ? -1.0 : 0.0);
 }
 
-// Voltage lost at the terminals, rotor frame, from the three phase currents.
-Complex terminal_loss(double voltage, double band, double theta, Complex i_dq) {
-    const auto phase = inverse_clarke(inverse_park(i_dq, theta));
-    return park(clarke(voltage * phase_sign(phase[0], band), voltage * phase_sign(phase[1], band),
-                       voltage * phase_sign(phase[2], band)),
-                theta);
+// Voltage lost at the terminals, rotor frame, from the three phase currents; `rotor` is e^{j theta}.
+Complex terminal_loss(double voltage, double band, Complex rotor, Complex i_dq) {
+    const auto phase = inverse_clarke(i_dq * rotor);
+    return clarke(voltage * phase_sign(phase[0], band), voltage * phase_sign(phase[1], band), voltage * phase_sign(phase[2], band)) *
+           std::conj(rotor);
 }
 
 class DeadTime final : public Effect {
@@ -27,14 +26,14 @@ public:
     explicit DeadTime(const ParameterSet& p) : Effect("deadtime", p) {}
 
     Complex plant_inverter_loss(double theta, Complex i) const override {
-        return terminal_loss(values()[0], values()[1], theta, i);
+        return terminal_loss(values()[0], values()[1], std::polar(1.0, theta), i);
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
             for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-                const Complex loss = terminal_loss(p[0], p[1], s.theta[k], {s.i_d[k], s.i_q[k]});
+                const Complex loss = terminal_loss(p[0], p[1], {s.cos_theta[k], s.sin_theta[k]}, {s.i_d[k], s.i_q[k]});
                 s.u_d[k] += loss.real();
                 s.u_q[k] += loss.imag();
             }

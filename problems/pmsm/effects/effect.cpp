@@ -12,7 +12,18 @@ const bool effects_listed = list_registry<EffectFactory>("effects");
 
 void ModelState::resize(Eigen::Index n) {
     for (auto* a : {&i_d, &i_q, &omega, &rs, &psi_f, &psi_d, &psi_q, &u_d, &u_q}) a->resize(n);
-    theta.resize(data && data->theta_e ? n : 0);
+    for (auto* a : {&theta, &cos_theta, &sin_theta}) a->resize(data && data->theta_e ? n : 0);
+}
+
+void ModelState::rotate_angle(double delta) {
+    if (theta.size() == 0) return;
+    theta += delta;
+    const double c = std::cos(delta), s = std::sin(delta);
+    for (Eigen::Index k = 0; k < theta.size(); ++k) {
+        const double ck = cos_theta[k], sk = sin_theta[k];
+        cos_theta[k] = ck * c - sk * s;
+        sin_theta[k] = sk * c + ck * s;
+    }
 }
 
 Effect::Effect(std::string name, const ParameterSet& settings) : name_(std::move(name)), settings_(settings) {

@@ -57,12 +57,16 @@ struct ModelState {
     const Measurement* data = nullptr;  // temperatures and the logged angle, when present
     Eigen::ArrayXd i_d, i_q;            // A: measured (controller frame), then true (rotor frame)
     Eigen::ArrayXd theta;               // rad: logged angle, then true angle (empty without theta_e)
+    // cos and sin of theta, kept in step with it (rotate_angle), so effects need no sincos per sample.
+    Eigen::ArrayXd cos_theta, sin_theta;
     Eigen::ArrayXd omega;               // rad/s electrical
     Eigen::ArrayXd rs, psi_f;           // Ω, Wb per sample
     Eigen::ArrayXd psi_d, psi_q;        // Wb
     Eigen::ArrayXd u_d, u_q;            // V: machine terminal voltage, then command, then logged
 
     void resize(Eigen::Index n);
+    // theta += delta, with its cos and sin.
+    void rotate_angle(double delta);
 };
 
 // What the plant knows at an instant, for effects that depend on operating conditions.

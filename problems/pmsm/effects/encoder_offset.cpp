@@ -25,7 +25,7 @@ public:
     void model(ModelStage stage, const double* p, ModelState& s) const override {
         if (stage == ModelStage::SensorAngle) {
             rotate(s.i_d, s.i_q, p[0]);
-            if (s.theta.size() > 0) s.theta -= p[0];
+            s.rotate_angle(-p[0]);
         } else {
             rotate(s.u_d, s.u_q, -p[0]);
         }

@@ -12,24 +12,33 @@ Complex ripple_flux(const double* p, double theta, double psi_f) {
     return psi_f * (p[0] * std::polar(1.0, -(6.0 * theta + p[1])) + p[2] * std::polar(1.0, 6.0 * theta + p[3]));
 }
 
-// Back-EMF of the ripple per unit electrical speed (V s/rad).
-Complex ripple_emf(const double* p, double theta, double psi_f) {
-    return Complex{0.0, psi_f} *
-           (-5.0 * p[0] * std::polar(1.0, -(6.0 * theta + p[1])) + 7.0 * p[2] * std::polar(1.0, 6.0 * theta + p[3]));
-}
+// The back-EMF of the ripple per unit electrical speed and flux is j [-5 h5 e^{-j(6 theta + phi5)}
+// + 7 h7 e^{j(6 theta + phi7)}]: two fixed phasors, here once per parameter set, turned by e^{j 6 theta}.
+struct EmfPhasors {
+    Complex fifth, seventh;
+    explicit EmfPhasors(const double* p)
+        : fifth(Complex{0.0, -5.0 * p[0]} * std::polar(1.0, -p[1])), seventh(Complex{0.0, 7.0 * p[2]} * std::polar(1.0, p[3])) {}
+    // Back-EMF per unit electrical speed (V s/rad); `sixth` is e^{j 6 theta}.
+    Complex at(Complex sixth, double psi_f) const { return psi_f * (fifth * std::conj(sixth) + seventh * sixth); }
+};
 
 class FluxHarmonic final : public Effect {
 public:
     explicit FluxHarmonic(const ParameterSet& p) : Effect("flux_harmonic", p) {}
 
     Complex plant_flux_ripple(double theta, double psi_f) const override { return ripple_flux(values().data(), theta, psi_f); }
-    Complex plant_emf_ripple(double theta, double psi_f) const override { return ripple_emf(values().data(), theta, psi_f); }
+    Complex plant_emf_ripple(double theta, double psi_f) const override {
+        return EmfPhasors(values().data()).at(std::polar(1.0, 6.0 * theta), psi_f);
+    }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::MachineVoltage); }
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
+        const EmfPhasors emf(p);
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-            const Complex e = s.omega[k] * ripple_emf(p, s.theta[k], s.psi_f[k]);
+            const Complex rotor{s.cos_theta[k], s.sin_theta[k]};
+            const Complex cube = rotor * rotor * rotor;
+            const Complex e = s.omega[k] * emf.at(cube * cube, s.psi_f[k]);
             s.u_d[k] += e.real();
             s.u_q[k] += e.imag();
         }
