@@ -59,6 +59,20 @@ void merge(toml::table& into, const toml::table& from, const std::string& prefix
     }
 }
 
+// The text of `node` as the file writes it (from its source region), for tables people read.
+std::string as_written(const std::string& text, const toml::node& node) {
+    const auto& region = node.source();
+    std::vector<std::size_t> line_start{0};
+    for (std::size_t k = 0; k < text.size(); ++k)
+        if (text[k] == '\n') line_start.push_back(k + 1);
+    auto offset = [&](const toml::source_position& p) {
+        const std::size_t line = std::clamp<std::size_t>(p.line, 1, line_start.size()) - 1;
+        return std::min(text.size(), line_start[line] + (p.column > 0 ? p.column - 1 : 0));
+    };
+    const std::size_t begin = offset(region.begin), end = offset(region.end);
+    return end > begin ? text.substr(begin, end - begin) : std::string();
+}
+
 toml::table parse_settings(const std::string& text, const std::string& source) {
     try {
         return toml::parse(text, source);
@@ -188,7 +202,11 @@ StudySpec read_study(const std::filesystem::path& path) {
         }
         if (!names.insert(e.name).second) throw InputError(file, line_of(name), field + ".name", "'" + e.name + "' is listed twice");
         e.clear = toml_text(settings_table(file, t, "clear", field));
-        if (t.get("weak")) e.weak = toml_text(settings_table(file, t, "weak", field));
+        e.clear_as_written = as_written(text, *t.get("clear"));
+        if (t.get("weak")) {
+            e.weak = toml_text(settings_table(file, t, "weak", field));
+            e.weak_as_written = as_written(text, *t.get("weak"));
+        }
         if (const auto* in_pairs = t.get("in_pairs")) {
             if (!in_pairs->is_boolean()) throw InputError(file, line_of(*in_pairs), field + ".in_pairs", "expects true or false");
             e.in_combinations = in_pairs->value<bool>().value();
@@ -200,6 +218,7 @@ StudySpec read_study(const std::filesystem::path& path) {
         o.line = line_of(t);
         o.name = string_of(file, required(file, t, "name", field), field + ".name");
         o.settings = toml_text(settings_table(file, t, "settings", field));
+        o.settings_as_written = as_written(text, *t.get("settings"));
         spec.outside.push_back(std::move(o));
     });
     each_table(file, root, "together", {"effects", "settings"}, [&](const std::string& field, const toml::table& t) {
@@ -464,8 +483,10 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
         for (char ch : text) out += ch == '\n' ? ' ' : ch;
         return out;
     };
-    for (const auto& e : spec.effects) md += fmt::format("| {} | `{}` | `{}` |\n", e.name, one_line(e.clear), one_line(e.weak));
-    for (const auto& o : spec.outside) md += fmt::format("| {} (not in the library) | `{}` | — |\n", o.name, one_line(o.settings));
+    for (const auto& e : spec.effects)
+        md += fmt::format("| {} | `{}` | {} |\n", e.name, one_line(e.clear_as_written),
+                          e.weak.empty() ? std::string("—") : "`" + one_line(e.weak_as_written) + "`");
+    for (const auto& o : spec.outside) md += fmt::format("| {} (not in the library) | `{}` | — |\n", o.name, one_line(o.settings_as_written));
     return md;
 }
 

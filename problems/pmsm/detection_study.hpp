@@ -26,6 +26,7 @@ namespace mhb::pmsm {
 struct StudyEffect {
     std::string name;            // the library effect the diagnosis should recommend
     std::string clear, weak;     // profile settings, TOML text of nested tables (weak empty: no near-limit case)
+    std::string clear_as_written, weak_as_written;  // the same, as the study file writes them (for tables)
     bool in_combinations = true; // also in "all" pairs
     long line = 0;               // in the study file
 };
@@ -33,6 +34,7 @@ struct StudyEffect {
 struct StudyOutside {
     std::string name;            // an effect the library lacks
     std::string settings;        // profile settings, TOML text
+    std::string settings_as_written;
     long line = 0;
 };
 
