@@ -23,9 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-ProblemContext problem_context(const ExperimentSpec& spec, std::uint64_t trial_seed) {
+ProblemContext problem_context(const ExperimentSpec& spec, std::uint64_t trial_seed, std::shared_ptr<SharedProblemData> shared) {
     std::uint64_t state = trial_seed ^ 0xA5A5A5A5DEADBEEFULL;  // a stream apart from the optimiser's
-    return ProblemContext{fs::absolute(spec.file).parent_path(), splitmix64(state)};
+    return ProblemContext{fs::absolute(spec.file).parent_path(), splitmix64(state), std::move(shared)};
 }
 
 // The problem with the config's box applied, if it gives one.
@@ -155,7 +155,7 @@ void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous,
 
 }  // namespace
 
-ExperimentInfo describe_experiment(const ExperimentSpec& spec) {
+ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<SharedProblemData> shared) {
     ExperimentInfo info;
     info.name = spec.name;
     info.description = spec.description;
@@ -169,7 +169,7 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec) {
     info.plots = spec.plots;
     info.published = spec.published;
     for (const auto& v : spec.problems) {
-        const auto problem = create_problem(spec, v, problem_context(spec, derive_seed(spec.seed, "", v.label, 0)));
+        const auto problem = create_problem(spec, v, problem_context(spec, derive_seed(spec.seed, "", v.label, 0), shared));
         ProblemInfo p;
         p.label = v.label;
         p.name = v.name;
@@ -205,7 +205,9 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
     const auto start = std::chrono::steady_clock::now();
     RunSummary summary;
     summary.output = options.output ? *options.output : spec.output;
-    summary.info = describe_experiment(spec);
+    // One measurement read and one set of statistics per problem variant, shared by all its trials.
+    const auto shared = std::make_shared<SharedProblemData>();
+    summary.info = describe_experiment(spec, shared);
     const fs::path results_path = summary.output / "results.jsonl";
 
     std::error_code ec;
@@ -268,7 +270,7 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
             const std::uint64_t seed = derive_seed(spec.seed, ov.label, pv.label, static_cast<std::uint64_t>(task.trial));
             TrialRecord record;
             try {
-                auto problem = instantiate(pv, problem_context(spec, seed));
+                auto problem = instantiate(pv, problem_context(spec, seed, shared));
                 auto optimizer = make_optimizer(ov.name, ov.values);
                 TrialSetup setup{spec.budget, seed, problem->has_named_parameters()};
                 record = run_trial(*optimizer, *problem, setup);

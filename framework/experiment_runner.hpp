@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "framework/experiment_config.hpp"
+#include "framework/problem.hpp"
 #include "framework/results_store.hpp"
 
 namespace mhb {
@@ -31,7 +32,8 @@ struct RunSummary {
 
 // Resolves problem information (dimension, truth) by creating each problem once; InputError for
 // problems that cannot be created from the config (e.g. a missing data file).
-ExperimentInfo describe_experiment(const ExperimentSpec& spec);
+// `shared`: the experiment's shared problem data, so that the trials reuse what this builds.
+ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<SharedProblemData> shared = nullptr);
 
 RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options);
 

@@ -2,11 +2,14 @@
 // A problem is a box-bounded objective that evaluates a whole population at once.
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "framework/shared_problem_data.hpp"
 
 namespace mhb {
 
@@ -74,6 +77,8 @@ private:
 struct ProblemContext {
     std::filesystem::path base_directory;  // relative paths in parameters resolve against this
     std::uint64_t seed = 0;                 // for problems with noise or random instances
+    // Data shared by the instances of one experiment (nullptr outside an experiment: build your own).
+    std::shared_ptr<SharedProblemData> shared;
 };
 
 }  // namespace mhb

@@ -270,3 +270,27 @@ TEST_CASE("a box set by the experiment moves the reference optimum to the box's 
     REQUIRE(f[0] < f[1]);
     REQUIRE(f[0] < f[2]);
 }
+
+TEST_CASE("the instances of one experiment read the measurement once and share its statistics", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
+    const auto path = simulated_file(work, "quiet_paper", quiet_paper_drive());
+    ProblemContext context{work, 0, std::make_shared<SharedProblemData>()};
+    const auto first = make_problem("pmsm_identification", {{"data", path.string()}}, context);
+    // The file is gone: a second instance can only come from what the first one built.
+    std::filesystem::remove(path);
+    const auto second = make_problem("pmsm_identification", {{"data", path.string()}}, context);
+    CHECK(context.shared->builds() == 1);
+    CHECK(second->truth().reference_solution == first->truth().reference_solution);
+    CHECK(second->describe() == first->describe());
+    Matrix x(4, 1);
+    x.col(0) = *first->truth().reference_solution;
+    Vector f1(1), f2(1);
+    first->evaluate(x, f1);
+    second->evaluate(x, f2);
+    CHECK(f1[0] == f2[0]);
+    // Other parameters are other statistics: built anew (and here refused, since the file is gone).
+    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", path.string()}, {"settle", 0.1}}, context), InputError);
+    // Outside an experiment each instance builds its own.
+    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", path.string()}}, ProblemContext{work, 0, nullptr}), InputError);
+}

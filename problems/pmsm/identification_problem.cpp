@@ -3,6 +3,8 @@
 // whole population is evaluated from precomputed least-squares statistics at O(1) per candidate, and
 // the exact optimum is known (docs/pmsm.md).
 #include <filesystem>
+#include <memory>
+#include <optional>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -16,6 +18,28 @@
 namespace mhb::pmsm {
 namespace {
 
+// What every trial's instance reads and precomputes from the measurement: the same for all of them.
+struct MeasurementStatistics {
+    Measurement data;               // the settled rows
+    Eigen::Index total_samples = 0;
+    BaseModelFit fit;
+    std::optional<Eigen::Vector4d> truth;  // from the simulation sidecar, when there is one
+};
+
+MeasurementStatistics read_statistics(const std::filesystem::path& path, double settle, Fitness fitness, CovarianceMethod method) {
+    MeasurementStatistics s;
+    const Measurement all = read_measurement(path);
+    const auto rows = settled_rows(all, settle);
+    if (rows.size() < 3)
+        throw InputError(path.string(), 0, "settle",
+                         fmt::format("dropping {} s after each segment start leaves {} samples; at least 3 are needed", settle, rows.size()));
+    s.data = select_rows(all, rows);
+    s.total_samples = all.size();
+    s.fit = fit_base_model(s.data, fitness, method);
+    s.truth = read_sidecar_truth(path);
+    return s;
+}
+
 class PmsmIdentification final : public Problem {
 public:
     PmsmIdentification(const ParameterSet& p, const ProblemContext& context) {
@@ -23,25 +47,27 @@ public:
         if (data.empty()) throw ParameterError("data", "required: the measurement CSV to fit (docs/data-format.md)");
         shown_path_ = data;
         path_ = std::filesystem::path(data).is_absolute() ? std::filesystem::path(data) : context.base_directory / data;
-        const Measurement all = read_measurement(path_);
-        const auto rows = settled_rows(all, p.real("settle"));
-        if (rows.size() < 3)
-            throw InputError(path_.string(), 0, "settle",
-                             fmt::format("dropping {} s after each segment start leaves {} samples; at least 3 are needed",
-                                         p.real("settle"), rows.size()));
-        data_ = select_rows(all, rows);
-        total_samples_ = all.size();
+        const double settle = p.real("settle");
+        const Fitness fitness = parse_fitness(p.text("fitness"));
         const CovarianceMethod method = p.text("uncertainty") == "white" ? CovarianceMethod::White : CovarianceMethod::NeweyWest;
-        fit_ = fit_base_model(data_, parse_fitness(p.text("fitness")), method);
+        auto build = [&] { return read_statistics(path_, settle, fitness, method); };
+        if (context.shared) {
+            const std::string key = fmt::format("pmsm_identification|{}|{}|{}|{}", std::filesystem::absolute(path_).lexically_normal().string(),
+                                                settle, p.text("fitness"), p.text("uncertainty"));
+            statistics_ = context.shared->get<MeasurementStatistics>(key, build);
+        } else {
+            statistics_ = std::make_shared<const MeasurementStatistics>(build());
+        }
+        const BaseModelFit& fit = statistics_->fit;
 
         const Bounds box = base_parameter_bounds();
         set_domain(box.lower, box.upper, base_parameter_names);
-        if (auto truth = read_sidecar_truth(path_)) truth_.true_parameters = Vector(*truth);
-        set_reference(fit_.in_bounds, "Table 2's box");
-        gram_ = fit_.least_squares.gram;
-        centre_ = fit_.least_squares.solution;
-        scale_ = 1.0 / static_cast<double>(fit_.samples);
-        rss_ = fit_.least_squares.rss;
+        if (statistics_->truth) truth_.true_parameters = Vector(*statistics_->truth);
+        set_reference(fit.in_bounds, "Table 2's box");
+        gram_ = fit.least_squares.gram;
+        centre_ = fit.least_squares.solution;
+        scale_ = 1.0 / static_cast<double>(fit.samples);
+        rss_ = fit.least_squares.rss;
     }
 
     void evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) const override {
@@ -52,28 +78,30 @@ public:
     }
 
     std::string describe() const override {
-        const auto& u = fit_.uncertainty;
-        std::string text = fmt::format("data {}: {} of {} samples", shown_path_, data_.size(), total_samples_);
-        if (data_.has_segments()) text += fmt::format(" in {} segments", data_.segment_labels.size());
+        const auto& fit = statistics_->fit;
+        const auto& data = statistics_->data;
+        const auto& u = fit.uncertainty;
+        std::string text = fmt::format("data {}: {} of {} samples", shown_path_, data.size(), statistics_->total_samples);
+        if (data.has_segments()) text += fmt::format(" in {} segments", data.segment_labels.size());
         text += fmt::format("; fitness {}; residual d {:.3g} V, q {:.3g} V (lag-1 correlation {:.2f}, {:.2f}); "
                             "least-squares optimum, 95 % {}:",
-                            to_string(fit_.fitness), fit_.axis_noise[0], fit_.axis_noise[1], u.axis_rho[0], u.axis_rho[1],
+                            to_string(fit.fitness), fit.axis_noise[0], fit.axis_noise[1], u.axis_rho[0], u.axis_rho[1],
                             to_string(u.method));
         for (int j = 0; j < 4; ++j)
             text += fmt::format(" {} = {:.6g} ± {:.2g}", base_parameter_names[static_cast<std::size_t>(j)],
-                                fit_.least_squares.solution[j], u.critical_value * u.standard_error[j]);
-        for (const auto& w : data_.warnings) text += "; " + w;
+                                fit.least_squares.solution[j], u.critical_value * u.standard_error[j]);
+        for (const auto& w : data.warnings) text += "; " + w;
         return text;
     }
 
 protected:
-    void bounds_changed() override { set_reference(box_least_squares(fit_.least_squares, bounds()), "the experiment's box"); }
+    void bounds_changed() override { set_reference(box_least_squares(statistics_->fit.least_squares, bounds()), "the experiment's box"); }
 
 private:
     // The exact optimum inside the search box is the reference every optimiser should reach.
     void set_reference(const BoxLeastSquares& optimum, const std::string& box_name) {
         truth_.reference_solution = optimum.solution;
-        truth_.reference_fitness = optimum.rss / static_cast<double>(fit_.samples);
+        truth_.reference_fitness = optimum.rss / static_cast<double>(statistics_->fit.samples);
         truth_.optimum_value = truth_.reference_fitness;
         truth_.reference_label = "least-squares optimum";
         if (optimum.any_bound_active()) {
@@ -88,9 +116,7 @@ private:
 
     std::filesystem::path path_;
     std::string shown_path_;  // as the config wrote it, so tables do not depend on where the checkout lives
-    Measurement data_;
-    Eigen::Index total_samples_ = 0;
-    BaseModelFit fit_;
+    std::shared_ptr<const MeasurementStatistics> statistics_;
     Eigen::Matrix4d gram_;
     Eigen::Vector4d centre_;
     double scale_ = 1.0, rss_ = 0.0;
