@@ -205,12 +205,12 @@ TEST_CASE("pmsm_identification refuses what it cannot fit", "[pmsm][identificati
     const mhb::testing::TemporaryDirectory work_directory;
     const auto& work = work_directory.path();
     CHECK_THROWS_AS(make_problem("pmsm_identification"), ParameterError);
-    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", std::string("no_such_file.csv")}}, {work, 0}), InputError);
+    CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", std::string("no_such_file.csv")}}, {work, 0, nullptr}), InputError);
     CHECK_THROWS_AS(make_problem("pmsm_identification", {{"fitness", std::string("mae")}, {"data", std::string("x.csv")}}),
                     ParameterError);
     // Relative paths resolve against the context's base directory.
     const auto path = simulated_file(work, "relative", quiet_drive({{"a", 10.0, 0.1, 0.0, 0.5, 10}, {"b", 10.0, 0.1, -0.1, 0.2, 10}}));
-    CHECK_NOTHROW(make_problem("pmsm_identification", {{"data", path.filename().string()}}, {work, 0}));
+    CHECK_NOTHROW(make_problem("pmsm_identification", {{"data", path.filename().string()}}, {work, 0, nullptr}));
     Measurement bare = read_measurement(path);
     bare.t.reset();
     write_measurement(work / "no_time.csv", bare);
