@@ -29,7 +29,8 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
-        auto data = pmsm::read_settled_measurement(o->data, o->settle);
+        const auto columns = column_map_option(*o);
+        auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
         pmsm::DiagnosisOptions options;
         options.fit.optimizer = o->optimizer;
         options.fit.evaluations = o->evaluations;

@@ -363,8 +363,8 @@ std::string image(const std::string& file, const std::string& alt) { return file
 
 }  // namespace
 
-Measurement read_settled_measurement(const fs::path& path, double settle) {
-    const Measurement all = read_measurement(path);
+Measurement read_settled_measurement(const fs::path& path, double settle, const ColumnMap& map) {
+    const Measurement all = read_measurement(path, map);
     const auto rows = settled_rows(all, settle);
     if (rows.size() < 10)
         throw InputError(path.string(), 0, "settle",

@@ -14,7 +14,7 @@ namespace mhb::pmsm {
 
 // Reads a measurement and drops the first `settle` seconds after each segment start; InputError when
 // fewer than 10 samples remain.
-Measurement read_settled_measurement(const std::filesystem::path& path, double settle);
+Measurement read_settled_measurement(const std::filesystem::path& path, double settle, const ColumnMap& map = {});
 
 // {"model", "data", "samples", "method", "rms": {"u_d", "u_q", "total"}, "parameters": {name: {"value",
 // "ci95", "standard_error", "unit", "fixed", "range", "at_bound"}}, "segments": [...]}; intervals the
