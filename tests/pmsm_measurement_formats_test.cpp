@@ -213,6 +213,23 @@ TEST_CASE("numeric segments and other layouts: integers, char matrices, fixed-le
             dir.write("n.csv", "segment,i_d,i_q,u_d,u_q,omega_e\n4,1,1,1,1,1\n4,2,2,2,2,2\n7,3,3,3,3,3\n"));
         check_identical(m, csv);
     }
+    SECTION("a char matrix of labels in MAT, one label per row, padding dropped") {
+        const char labels[] = {'a', 'a', 'b', 'x', 'x', 'x', ' ', ' ', 'c'};  // column-major rows "ax", "ax", "bxc"
+        mat_t* mat = Mat_CreateVer((dir.path() / "chars.mat").c_str(), nullptr, MAT_FT_MAT5);
+        std::size_t dims[2] = {3, 3};
+        matvar_t* v = Mat_VarCreate("segment", MAT_C_CHAR, MAT_T_UTF8, 2, dims, const_cast<char*>(labels), 0);
+        Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+        Mat_VarFree(v);
+        for (const char* name : {"i_d", "i_q", "u_d", "u_q", "omega_e"}) {
+            v = mat_variable({name, ones, {}}, true);
+            Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+            Mat_VarFree(v);
+        }
+        Mat_Close(mat);
+        const auto m = read_measurement(dir.path() / "chars.mat");
+        CHECK(m.segment_labels == std::vector<std::string>{"ax", "bxc"});
+        CHECK(m.segment == Eigen::Vector3i(0, 0, 1));
+    }
     SECTION("fixed-length HDF5 strings and integer datasets; a row vector in MAT") {
         H5::H5File file((dir.path() / "fixed.h5").string(), H5F_ACC_TRUNC);
         const hsize_t dims[1] = {3};
@@ -368,6 +385,16 @@ TEST_CASE("each refusal of a binary file names the file, the variable and the ro
         CHECK(e.field() == "op (segment)");
         CHECK(e.message() == "row 2: empty segment label");
     }
+    SECTION("a value the unit conversion takes beyond the range of a double") {
+        auto columns = base();
+        columns[4].numbers[2] = 1.7e308;
+        write_hdf5(dir.path() / "fast.h5", columns);
+        auto map = parse_column_map("omega_e[rpm]", "command line", "--columns");
+        map.pole_pairs = 16;
+        const auto e = refusal(dir.path() / "fast.h5", map);
+        CHECK(e.field() == "omega_e");
+        CHECK(e.message() == "row 3: 1.7e+308 rpm is beyond the range of a double after conversion");
+    }
     SECTION("HDF5 without datasets at the root and with several groups") {
         {
             H5::H5File file((dir.path() / "groups.h5").string(), H5F_ACC_TRUNC);
@@ -453,4 +480,18 @@ TEST_CASE("mhbench fit on a MAT file with --columns gives the CSV's parameters",
     const auto no_pairs = mhb::testing::run_mhbench("diagnose --data " + csv.string() + " --columns omega_e[rpm]", dir.path() / "log");
     CHECK(no_pairs.exit_code == 2);
     CHECK(no_pairs.output.find("rpm is converted to electrical rad/s with the pole-pair count") != std::string::npos);
+}
+
+TEST_CASE("diagnose suggests next commands that read the file with the same column map", "[pmsm][measurement][formats][cli]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto h5 = dir.path() / "offset.h5";
+    write_hdf5(h5, columns_of(mhb::pmsm::testing::diagnosis_data({{"encoder_offset", {}}}), {{"theta_e", "angle"}}), "bench");
+    const auto run = mhb::testing::run_mhbench("diagnose --data " + h5.string() + " --columns theta_e=angle --report " +
+                                                   (dir.path() / "report").string(),
+                                               dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    const std::string next = "mhbench fit --data " + h5.string() + " --columns theta_e=angle --model base+encoder_offset";
+    CHECK(run.output.find("next: " + next) != std::string::npos);
+    CHECK(mhb::testing::read_file(dir.path() / "report" / "report.md").find(next) != std::string::npos);
 }

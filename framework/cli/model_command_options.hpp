@@ -49,6 +49,26 @@ inline pmsm::ColumnMap column_map_option(const ModelCommandOptions& o) {
     return pmsm::column_map_from_options(o.columns, o.columns_file, o.pole_pairs);
 }
 
+// `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.
+inline std::string shell_word(const std::string& text) {
+    const bool bare = !text.empty() && text.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                                              "0123456789_./=,:+-") == std::string::npos;
+    if (bare) return text;
+    std::string out = "'";
+    for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+// The options after --data's value that read the data as this command did, for the commands it
+// suggests next: " --columns ... --columns-file ... --pole-pairs N", or "" without a column map.
+inline std::string data_reading_options(const ModelCommandOptions& o) {
+    std::string out;
+    if (!o.columns.empty()) out += " --columns " + shell_word(o.columns);
+    if (!o.columns_file.empty()) out += " --columns-file " + shell_word(o.columns_file);
+    if (o.pole_pairs > 0) out += " --pole-pairs " + std::to_string(o.pole_pairs);
+    return out;
+}
+
 // The --optimizer value as a registered optimizer's name; a typo is refused naming the option and
 // the closest name, before any data is read.
 inline void check_optimizer_option(const std::string& name) {
