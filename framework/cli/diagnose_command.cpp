@@ -29,7 +29,8 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
-        auto data = pmsm::read_settled_measurement(o->data, o->settle);
+        const auto columns = column_map_option(*o);
+        auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
         pmsm::DiagnosisOptions options;
         options.fit.optimizer = o->optimizer;
         options.fit.evaluations = o->evaluations;
@@ -37,7 +38,8 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())
-            fmt::print("\nnext: mhbench fit --data {} --model {}\n", o->data, diagnosis.recommended.text());
+            fmt::print("\nnext: mhbench fit --data {}{} --model {}\n", shell_word(o->data), data_reading_options(*o),
+                       diagnosis.recommended.text());
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;
@@ -45,7 +47,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
             fmt::print("\nJSON: {}\n", o->json);
         }
         if (!o->report.empty()) {
-            const auto outcome = pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data);
+            const auto outcome = pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data, data_reading_options(*o));
             fmt::print("{}report: {} ({} plots)\n", o->json.empty() ? "\n" : "", outcome.markdown.string(), outcome.images.size());
             for (const auto& note : outcome.notes) fmt::print("note: {}\n", note);
         }

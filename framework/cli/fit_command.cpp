@@ -23,7 +23,8 @@ const bool registered = register_command("fit", [](CLI::App& app) {
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
-        const auto data = pmsm::read_settled_measurement(o->data, o->settle);
+        const auto columns = column_map_option(*o);
+        const auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
         pmsm::FitOptions options;
         options.optimizer = o->optimizer;
         options.evaluations = o->evaluations;

@@ -9,6 +9,7 @@
 #include "framework/cli/option_ranges.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
+#include "problems/pmsm/column_map.hpp"
 
 namespace mhb::cli {
 
@@ -17,6 +18,8 @@ inline constexpr std::int64_t max_fit_evaluations = 10'000'000;
 
 struct ModelCommandOptions {
     std::string data, model = "base", json, optimizer = "cmaes";
+    std::string columns, columns_file;
+    int pole_pairs = 0;
     double settle = 0.0;
     std::int64_t evaluations = 0;
     std::uint64_t seed = 1;
@@ -24,7 +27,12 @@ struct ModelCommandOptions {
 
 inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::string& model_help,
                               const std::string& json_help) {
-    cmd->add_option("--data", o.data, "measurement CSV (docs/data-format.md)")->required();
+    cmd->add_option("--data", o.data, "measurement file: CSV, MAT (v5, v7, v7.3) or HDF5 (docs/data-format.md)")->required();
+    cmd->add_option("--columns", o.columns,
+                    "the file's names and units for mhbench's columns, e.g. i_d=Id_meas[mA],omega_e=speed[rpm]");
+    cmd->add_option("--columns-file", o.columns_file, "the same map as a TOML file (docs/data-format.md)");
+    cmd->add_option("--pole-pairs", o.pole_pairs, "pole-pair count, converting a speed in rpm to electrical rad/s")
+        ->check(whole_number_in<int>(1, 1000));
     cmd->add_option("--model", o.model, model_help);
     cmd->add_option("--optimizer", o.optimizer, "optimizer searching the nonlinear effect parameters");
     cmd->add_option("--evaluations", o.evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)")
@@ -34,6 +42,31 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
     cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)")
         ->check(number_in(0.0, 1e6));
     cmd->add_option("--json", o.json, json_help);
+}
+
+// The column map of --columns, --columns-file and --pole-pairs, checked before any data is read.
+inline pmsm::ColumnMap column_map_option(const ModelCommandOptions& o) {
+    return pmsm::column_map_from_options(o.columns, o.columns_file, o.pole_pairs);
+}
+
+// `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.
+inline std::string shell_word(const std::string& text) {
+    const bool bare = !text.empty() && text.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                                              "0123456789_./=,:+-") == std::string::npos;
+    if (bare) return text;
+    std::string out = "'";
+    for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+// The options after --data's value that read the data as this command did, for the commands it
+// suggests next: " --columns ... --columns-file ... --pole-pairs N", or "" without a column map.
+inline std::string data_reading_options(const ModelCommandOptions& o) {
+    std::string out;
+    if (!o.columns.empty()) out += " --columns " + shell_word(o.columns);
+    if (!o.columns_file.empty()) out += " --columns-file " + shell_word(o.columns_file);
+    if (o.pole_pairs > 0) out += " --pole-pairs " + std::to_string(o.pole_pairs);
+    return out;
 }
 
 // The --optimizer value as a registered optimizer's name; a typo is refused naming the option and

@@ -363,8 +363,8 @@ std::string image(const std::string& file, const std::string& alt) { return file
 
 }  // namespace
 
-Measurement read_settled_measurement(const fs::path& path, double settle) {
-    const Measurement all = read_measurement(path);
+Measurement read_settled_measurement(const fs::path& path, double settle, const ColumnMap& map) {
+    const Measurement all = read_measurement(path, map);
     const auto rows = settled_rows(all, settle);
     if (rows.size() < 10)
         throw InputError(path.string(), 0, "settle",
@@ -529,7 +529,8 @@ std::string diagnosis_text(const Diagnosis& d) {
     return t;
 }
 
-ReportOutcome write_diagnosis_report(const fs::path& directory, const Measurement& data, const Diagnosis& d, const std::string& data_path) {
+ReportOutcome write_diagnosis_report(const fs::path& directory, const Measurement& data, const Diagnosis& d, const std::string& data_path,
+                                     const std::string& data_options) {
     ReportOutcome outcome;
     fs::create_directories(directory);
     Plotter plot(directory, outcome);
@@ -577,8 +578,8 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     md += image(path_png, "residual after each step of the search");
     if (d.recommended.text() != m.spec.text() || !d.tie.empty()) {
         const std::string next = d.recommended.text() != m.spec.text() ? d.recommended.text() : m.spec.with(d.tie.front()).text();
-        md += fmt::format("Next step:\n\n    mhbench fit --data {} --model {}\n    mhbench diagnose --data {} --model {} --report <dir>\n\n", data_path,
-                          next, data_path, next);
+        md += fmt::format("Next step:\n\n    mhbench fit --data {}{} --model {}\n    mhbench diagnose --data {}{} --model {} --report <dir>\n\n",
+                          data_path, data_options, next, data_path, data_options, next);
     }
 
     md += "## The fitted model\n\n";

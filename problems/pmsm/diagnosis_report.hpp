@@ -14,7 +14,7 @@ namespace mhb::pmsm {
 
 // Reads a measurement and drops the first `settle` seconds after each segment start; InputError when
 // fewer than 10 samples remain.
-Measurement read_settled_measurement(const std::filesystem::path& path, double settle);
+Measurement read_settled_measurement(const std::filesystem::path& path, double settle, const ColumnMap& map = {});
 
 // {"model", "data", "samples", "method", "rms": {"u_d", "u_q", "total"}, "parameters": {name: {"value",
 // "ci95", "standard_error", "unit", "fixed", "range", "at_bound"}}, "segments": [...]}; intervals the
@@ -34,8 +34,10 @@ struct ReportOutcome {
     std::vector<std::string> notes;             // e.g. gnuplot missing
 };
 
-// Writes report.md and its plots into `directory` (created). `data` is the measurement diagnosed.
+// Writes report.md and its plots into `directory` (created). `data` is the measurement diagnosed;
+// `data_options` (e.g. " --columns i_d=Id") follow `data_path` in the commands the report suggests,
+// so that they read the file as the diagnosis did.
 ReportOutcome write_diagnosis_report(const std::filesystem::path& directory, const Measurement& data, const Diagnosis& diagnosis,
-                                     const std::string& data_path);
+                                     const std::string& data_path, const std::string& data_options = "");
 
 }  // namespace mhb::pmsm

@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "problems/pmsm/column_map.hpp"
+
 namespace mhb::pmsm {
 
 struct Measurement {
@@ -41,12 +43,22 @@ inline constexpr std::int64_t max_measurement_rows = 5'000'000;
 inline constexpr const char* required_columns[] = {"i_d", "i_q", "u_d", "u_q", "omega_e"};
 inline constexpr const char* optional_columns[] = {"t", "segment", "theta_e", "temp_winding", "temp_magnet"};
 
-// Reads a measurement CSV. Throws mhb::InputError (file, line, column) on a missing required column,
-// a duplicate column, a non-numeric or non-finite value, a row with the wrong number of fields, an
-// empty label, or a file without data rows. Unknown columns are ignored with a warning.
-Measurement read_measurement(const std::filesystem::path& path);
+enum class MeasurementFormat { Csv, Mat5, Mat73, Hdf5, OtherMat };
+
+// The format of a file by its content, whatever its name: a "MATLAB 5.0 MAT-file" header (v5, v7),
+// the HDF5 signature after a MATLAB header (v7.3), the HDF5 signature at 0, 512, 1024, ... (HDF5), a
+// MATLAB header with neither (v4 or damaged), else CSV text. Csv also for what cannot be opened.
+MeasurementFormat measurement_format(const std::filesystem::path& path);
+
+// Reads a measurement from CSV, MAT (v5, v7, v7.3) or HDF5, as measurement_format decides, with the
+// user's names and units mapped by `map` (docs/data-format.md). Throws mhb::InputError naming the
+// file, the line or row, and the column or variable on a missing required column, a duplicate
+// column, a non-numeric or non-finite value, a row with the wrong number of fields, columns of
+// different lengths, an empty label, or a file without data rows. Unknown columns are ignored with a
+// warning.
+Measurement read_measurement(const std::filesystem::path& path, const ColumnMap& map = {});
 // Parses CSV text; `source` names it in error messages.
-Measurement parse_measurement(const std::string& text, const std::string& source);
+Measurement parse_measurement(const std::string& text, const std::string& source, const ColumnMap& map = {});
 
 // Writes the present columns with a header; numbers in shortest round-trip form, so reading the file
 // back gives the same doubles.

@@ -1,0 +1,497 @@
+// MAT (v5, v7, v7.3) and HDF5 measurement files, the column map and unit scaling. The files are
+// written here with matio's and HDF5's own write APIs, so the tests need no MATLAB.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <H5Cpp.h>
+#include <matio.h>
+#include <nlohmann/json.hpp>
+
+#include "framework/input_error.hpp"
+#include "problems/pmsm/column_map.hpp"
+#include "problems/pmsm/measurement.hpp"
+#include "tests/pmsm_diagnosis_fixture.hpp"
+#include "tests/temporary_directory.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A column as a test file holds it: numbers or labels, under the file's own name.
+struct WrittenColumn {
+    std::string name;
+    std::vector<double> numbers;
+    std::vector<std::string> labels;
+};
+
+std::vector<double> values(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+std::vector<std::string> labels_of(const Measurement& m) {
+    std::vector<std::string> out;
+    for (Eigen::Index r = 0; r < m.size(); ++r) out.push_back(m.segment_labels[static_cast<std::size_t>(m.segment[r])]);
+    return out;
+}
+
+// Every column of `m` under mhbench's names, `renamed` replacing some of them.
+std::vector<WrittenColumn> columns_of(const Measurement& m, const std::map<std::string, std::string>& renamed = {}) {
+    auto name = [&](const std::string& n) { return renamed.count(n) ? renamed.at(n) : n; };
+    std::vector<WrittenColumn> out;
+    out.push_back({name("t"), values(*m.t), {}});
+    out.push_back({name("segment"), {}, labels_of(m)});
+    out.push_back({name("theta_e"), values(*m.theta_e), {}});
+    out.push_back({name("i_d"), values(m.i_d), {}});
+    out.push_back({name("i_q"), values(m.i_q), {}});
+    out.push_back({name("u_d"), values(m.u_d), {}});
+    out.push_back({name("u_q"), values(m.u_q), {}});
+    out.push_back({name("omega_e"), values(m.omega_e), {}});
+    out.push_back({name("temp_winding"), values(*m.temp_winding), {}});
+    out.push_back({name("temp_magnet"), values(*m.temp_magnet), {}});
+    return out;
+}
+
+matvar_t* mat_variable(const WrittenColumn& c, bool named) {
+    const char* name = named ? c.name.c_str() : nullptr;
+    if (c.labels.empty()) {
+        std::size_t dims[2] = {c.numbers.size(), 1};
+        return Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(c.numbers.data()), 0);
+    }
+    std::size_t dims[2] = {c.labels.size(), 1};
+    matvar_t* cell = Mat_VarCreate(name, MAT_C_CELL, MAT_T_CELL, 2, dims, nullptr, 0);
+    for (std::size_t k = 0; k < c.labels.size(); ++k) {
+        std::size_t text_dims[2] = {1, c.labels[k].size()};
+        Mat_VarSetCell(cell, static_cast<int>(k),
+                       Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UTF8, 2, text_dims, const_cast<char*>(c.labels[k].data()), 0));
+    }
+    return cell;
+}
+
+// A MAT file with one variable per column, or (with `struct_name`) one struct with a field per column.
+void write_mat(const fs::path& path, mat_ft version, const std::vector<WrittenColumn>& columns,
+               const std::string& struct_name = "", matio_compression compression = MAT_COMPRESSION_NONE) {
+    mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, version);
+    REQUIRE(mat);
+    if (struct_name.empty()) {
+        for (const auto& c : columns) {
+            matvar_t* v = mat_variable(c, true);
+            REQUIRE(Mat_VarWrite(mat, v, compression) == 0);
+            Mat_VarFree(v);
+        }
+    } else {
+        std::vector<const char*> fields;
+        for (const auto& c : columns) fields.push_back(c.name.c_str());
+        std::size_t dims[2] = {1, 1};
+        matvar_t* s = Mat_VarCreateStruct(struct_name.c_str(), 2, dims, fields.data(), static_cast<unsigned>(fields.size()));
+        for (const auto& c : columns) Mat_VarSetStructFieldByName(s, c.name.c_str(), 0, mat_variable(c, true));
+        REQUIRE(Mat_VarWrite(mat, s, compression) == 0);
+        Mat_VarFree(s);
+    }
+    Mat_Close(mat);
+}
+
+void write_hdf5_column(H5::Group& group, const WrittenColumn& c) {
+    if (c.labels.empty()) {
+        const hsize_t dims[1] = {c.numbers.size()};
+        auto ds = group.createDataSet(c.name, H5::PredType::IEEE_F64LE, H5::DataSpace(1, dims));
+        ds.write(c.numbers.data(), H5::PredType::NATIVE_DOUBLE);
+        return;
+    }
+    const hsize_t dims[1] = {c.labels.size()};
+    const H5::StrType text(H5::PredType::C_S1, H5T_VARIABLE);
+    std::vector<const char*> pointers;
+    for (const auto& l : c.labels) pointers.push_back(l.c_str());
+    auto ds = group.createDataSet(c.name, text, H5::DataSpace(1, dims));
+    ds.write(pointers.data(), text);
+}
+
+// An HDF5 file with one dataset per column at the root, or in the group `group_name`.
+void write_hdf5(const fs::path& path, const std::vector<WrittenColumn>& columns, const std::string& group_name = "") {
+    H5::H5File file(path.string(), H5F_ACC_TRUNC);
+    H5::Group group = group_name.empty() ? file.openGroup("/") : file.createGroup(group_name);
+    for (const auto& c : columns) write_hdf5_column(group, c);
+}
+
+void check_identical(const Measurement& a, const Measurement& b) {
+    REQUIRE(a.size() == b.size());
+    // Eigen's == compares every element with ==; NaN cannot occur (both readers refuse it).
+    CHECK(a.i_d == b.i_d);
+    CHECK(a.i_q == b.i_q);
+    CHECK(a.u_d == b.u_d);
+    CHECK(a.u_q == b.u_q);
+    CHECK(a.omega_e == b.omega_e);
+    REQUIRE(a.t.has_value() == b.t.has_value());
+    if (a.t) CHECK(*a.t == *b.t);
+    REQUIRE(a.theta_e.has_value() == b.theta_e.has_value());
+    if (a.theta_e) CHECK(*a.theta_e == *b.theta_e);
+    REQUIRE(a.temp_winding.has_value() == b.temp_winding.has_value());
+    if (a.temp_winding) CHECK(*a.temp_winding == *b.temp_winding);
+    REQUIRE(a.temp_magnet.has_value() == b.temp_magnet.has_value());
+    if (a.temp_magnet) CHECK(*a.temp_magnet == *b.temp_magnet);
+    CHECK(a.segment_labels == b.segment_labels);
+    CHECK(a.segment == b.segment);
+}
+
+InputError refusal(const fs::path& path, const ColumnMap& map = {}) {
+    try {
+        read_measurement(path, map);
+    } catch (const InputError& e) {
+        return e;
+    }
+    FAIL("the reader accepted " << path);
+    throw std::logic_error("unreachable");
+}
+
+const Measurement& drive() { return mhb::pmsm::testing::diagnosis_data({}); }
+
+}  // namespace
+
+TEST_CASE("MAT v5, v7, v7.3 and HDF5 files give the same doubles as the CSV, bit for bit", "[pmsm][measurement][formats]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "drive.csv";
+    write_measurement(csv, drive());
+    const Measurement reference = read_measurement(csv);
+    const auto columns = columns_of(drive());
+
+    SECTION("MAT v5") {
+        write_mat(dir.path() / "drive.mat", MAT_FT_MAT5, columns);
+        CHECK(measurement_format(dir.path() / "drive.mat") == MeasurementFormat::Mat5);
+        const auto m = read_measurement(dir.path() / "drive.mat");
+        check_identical(m, reference);
+        CHECK(m.warnings.empty());
+    }
+    SECTION("MAT v7 (v5 compressed)") {
+        write_mat(dir.path() / "drive.mat", MAT_FT_MAT5, columns, "", MAT_COMPRESSION_ZLIB);
+        check_identical(read_measurement(dir.path() / "drive.mat"), reference);
+    }
+    SECTION("MAT v7.3") {
+        write_mat(dir.path() / "drive.mat", MAT_FT_MAT73, columns);
+        CHECK(measurement_format(dir.path() / "drive.mat") == MeasurementFormat::Mat73);
+        check_identical(read_measurement(dir.path() / "drive.mat"), reference);
+    }
+    SECTION("the fields of a MAT file's only struct, v5 and v7.3") {
+        for (const auto version : {MAT_FT_MAT5, MAT_FT_MAT73}) {
+            write_mat(dir.path() / "struct.mat", version, columns, "log");
+            check_identical(read_measurement(dir.path() / "struct.mat"), reference);
+        }
+    }
+    SECTION("HDF5, datasets at the root") {
+        write_hdf5(dir.path() / "drive.h5", columns);
+        CHECK(measurement_format(dir.path() / "drive.h5") == MeasurementFormat::Hdf5);
+        check_identical(read_measurement(dir.path() / "drive.h5"), reference);
+    }
+    SECTION("HDF5, datasets in the root's only group") {
+        write_hdf5(dir.path() / "drive.h5", columns, "bench");
+        check_identical(read_measurement(dir.path() / "drive.h5"), reference);
+    }
+    SECTION("the content decides, not the name: HDF5 named .csv, CSV named .mat") {
+        write_hdf5(dir.path() / "really_hdf5.csv", columns);
+        CHECK(measurement_format(dir.path() / "really_hdf5.csv") == MeasurementFormat::Hdf5);
+        check_identical(read_measurement(dir.path() / "really_hdf5.csv"), reference);
+        fs::copy_file(csv, dir.path() / "really_csv.mat");
+        CHECK(measurement_format(dir.path() / "really_csv.mat") == MeasurementFormat::Csv);
+        check_identical(read_measurement(dir.path() / "really_csv.mat"), reference);
+    }
+}
+
+TEST_CASE("numeric segments and other layouts: integers, char matrices, fixed-length strings", "[pmsm][measurement][formats]") {
+    mhb::testing::TemporaryDirectory dir;
+    const std::vector<double> ones{1.0, 2.0, 3.0};
+    SECTION("a numeric segment in HDF5 is labelled by its number, as in CSV") {
+        auto columns = std::vector<WrittenColumn>{{"segment", {4, 4, 7}, {}}, {"i_d", ones, {}}, {"i_q", ones, {}},
+                                                  {"u_d", ones, {}},           {"u_q", ones, {}}, {"omega_e", ones, {}}};
+        write_hdf5(dir.path() / "n.h5", columns);
+        const auto m = read_measurement(dir.path() / "n.h5");
+        CHECK(m.segment_labels == std::vector<std::string>{"4", "7"});
+        const auto csv = read_measurement(
+            dir.write("n.csv", "segment,i_d,i_q,u_d,u_q,omega_e\n4,1,1,1,1,1\n4,2,2,2,2,2\n7,3,3,3,3,3\n"));
+        check_identical(m, csv);
+    }
+    SECTION("a char matrix of labels in MAT, one label per row, padding dropped") {
+        const char labels[] = {'a', 'a', 'b', 'x', 'x', 'x', ' ', ' ', 'c'};  // column-major rows "ax", "ax", "bxc"
+        mat_t* mat = Mat_CreateVer((dir.path() / "chars.mat").c_str(), nullptr, MAT_FT_MAT5);
+        std::size_t dims[2] = {3, 3};
+        matvar_t* v = Mat_VarCreate("segment", MAT_C_CHAR, MAT_T_UTF8, 2, dims, const_cast<char*>(labels), 0);
+        Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+        Mat_VarFree(v);
+        for (const char* name : {"i_d", "i_q", "u_d", "u_q", "omega_e"}) {
+            v = mat_variable({name, ones, {}}, true);
+            Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+            Mat_VarFree(v);
+        }
+        Mat_Close(mat);
+        const auto m = read_measurement(dir.path() / "chars.mat");
+        CHECK(m.segment_labels == std::vector<std::string>{"ax", "bxc"});
+        CHECK(m.segment == Eigen::Vector3i(0, 0, 1));
+    }
+    SECTION("fixed-length HDF5 strings and integer datasets; a row vector in MAT") {
+        H5::H5File file((dir.path() / "fixed.h5").string(), H5F_ACC_TRUNC);
+        const hsize_t dims[1] = {3};
+        const H5::StrType fixed(H5::PredType::C_S1, 4);
+        const char text[] = "ab\0\0ab\0\0cde ";
+        file.createDataSet("segment", fixed, H5::DataSpace(1, dims)).write(text, fixed);
+        const int counts[3] = {1, 2, 3};
+        for (const char* name : {"i_d", "i_q", "u_d", "u_q", "omega_e"})
+            file.createDataSet(name, H5::PredType::STD_I16LE, H5::DataSpace(1, dims)).write(counts, H5::PredType::NATIVE_INT);
+        file.close();
+        const auto m = read_measurement(dir.path() / "fixed.h5");
+        CHECK(m.segment_labels == std::vector<std::string>{"ab", "cde"});
+        CHECK(m.omega_e == Eigen::Vector3d(1, 2, 3));
+    }
+}
+
+TEST_CASE("the column map reads a user's names and units from CSV, MAT and HDF5 alike", "[pmsm][measurement][formats]") {
+    mhb::testing::TemporaryDirectory dir;
+    // Logged as a bench would: mA, mV, mechanical rpm, degrees, kelvin, milliseconds.
+    const std::vector<double> id_mA{-1500.0, 0.25, 2000.0}, iq_mA{100.0, 250.5, 300.0}, ud_mV{-12.5, 0.0, 4.25},
+        uq_mV{5300.0, 5200.0, 5100.0}, rpm{10.0, 20.0, 30.0}, deg{0.0, 90.0, 359.0}, kelvin{293.15, 300.0, 310.5},
+        ms{0.0, 0.4, 0.8};
+    const std::vector<WrittenColumn> columns{{"time_ms", ms, {}},     {"Id_meas", id_mA, {}}, {"Iq_meas", iq_mA, {}},
+                                             {"Vd_ref", ud_mV, {}},   {"Vq_ref", uq_mV, {}}, {"speed", rpm, {}},
+                                             {"angle", deg, {}},      {"T_wind", kelvin, {}}, {"op", {}, {"a", "a", "b"}}};
+    const std::string map_text =
+        "t=time_ms[ms],i_d=Id_meas[mA],i_q=Iq_meas[mA],u_d=Vd_ref[mV],u_q=Vq_ref[mV],omega_e=speed[rpm],"
+        "theta_e=angle[deg],temp_winding=T_wind[K],segment=op";
+    auto map = parse_column_map(map_text, "command line", "--columns");
+    map.pole_pairs = 16;
+
+    write_mat(dir.path() / "bench.mat", MAT_FT_MAT5, columns);
+    const auto m = read_measurement(dir.path() / "bench.mat", map);
+    for (int r = 0; r < 3; ++r) {
+        INFO("row " << r);
+        CHECK(m.i_d[r] == id_mA[r] / 1000.0);
+        CHECK(m.i_q[r] == iq_mA[r] / 1000.0);
+        CHECK(m.u_d[r] == ud_mV[r] / 1000.0);
+        CHECK(m.u_q[r] == uq_mV[r] / 1000.0);
+        CHECK(m.omega_e[r] == rpm[r] * (std::numbers::pi / 30.0 * 16));
+        CHECK((*m.theta_e)[r] == deg[r] * (std::numbers::pi / 180.0));
+        CHECK((*m.temp_winding)[r] == kelvin[r] - 273.15);
+        CHECK((*m.t)[r] == ms[r] / 1000.0);
+    }
+    CHECK(m.segment_labels == std::vector<std::string>{"a", "b"});
+    CHECK(m.omega_e[1] == Approx(20.0 * 16 * 2 * std::numbers::pi / 60.0));
+
+    write_mat(dir.path() / "bench73.mat", MAT_FT_MAT73, columns);
+    check_identical(read_measurement(dir.path() / "bench73.mat", map), m);
+    write_hdf5(dir.path() / "bench.h5", columns);
+    check_identical(read_measurement(dir.path() / "bench.h5", map), m);
+    const auto csv = dir.write("bench.csv",
+                               "time_ms,Id_meas,Iq_meas,Vd_ref,Vq_ref,speed,angle,T_wind,op\n"
+                               "0,-1500,100,-12.5,5300,10,0,293.15,a\n"
+                               "0.4,0.25,250.5,0,5200,20,90,300,a\n"
+                               "0.8,2000,300,4.25,5100,30,359,310.5,b\n");
+    check_identical(read_measurement(csv, map), m);
+
+    SECTION("the same map as a TOML file; the command line wins per column") {
+        const auto toml = dir.write("map.toml",
+                                    "pole_pairs = 16\n[columns]\nt = \"time_ms[ms]\"\ni_d = \"Id_meas[mA]\"\ni_q = \"Iq_meas[mA]\"\n"
+                                    "u_d = \"Vd_ref[mV]\"\nu_q = \"Vq_ref[mV]\"\nomega_e = \"speed[rpm]\"\ntheta_e = \"angle[deg]\"\n"
+                                    "temp_winding = \"T_wind[K]\"\nsegment = \"op\"\n");
+        check_identical(read_measurement(dir.path() / "bench.mat", column_map_from_options("", toml.string(), 0)), m);
+        const auto with_override = column_map_from_options("omega_e=speed[rpm]", toml.string(), 8);
+        CHECK(read_measurement(dir.path() / "bench.mat", with_override).omega_e[2] == 30.0 * (std::numbers::pi / 30.0 * 8));
+    }
+    SECTION("a unit on a column that keeps mhbench's name") {
+        const auto plain = dir.write("plain.csv", "i_d,i_q,u_d,u_q,omega_e\n1500,1,1,1,1\n");
+        CHECK(read_measurement(plain, parse_column_map("i_d[mA]", "command line", "--columns")).i_d[0] == 1.5);
+        const auto same = dir.write("same.csv", "i_d,i_q,u_d,u_q,omega_e,temp_magnet\n1,1,1,1,1,20\n");
+        CHECK((*read_measurement(same, column_map_from_options("temp_magnet[degC]", "", 0)).temp_magnet)[0] == 20.0);
+    }
+}
+
+TEST_CASE("each refusal of a binary file names the file, the variable and the row", "[pmsm][measurement][formats]") {
+    mhb::testing::TemporaryDirectory dir;
+    const std::vector<double> ones{1.0, 2.0, 3.0};
+    auto base = [&] {
+        return std::vector<WrittenColumn>{{"i_d", ones, {}}, {"i_q", ones, {}}, {"u_d", ones, {}}, {"u_q", ones, {}}, {"omega_e", ones, {}}};
+    };
+    const auto path = dir.path() / "bad.mat";
+    SECTION("a non-finite value names its row") {
+        auto columns = base();
+        columns[3].numbers[1] = std::nan("");
+        write_mat(path, MAT_FT_MAT5, columns);
+        const auto e = refusal(path);
+        CHECK(e.file() == path.string());
+        CHECK(e.field() == "u_q");
+        CHECK(e.message() == "row 2: not a finite number: nan");
+        write_hdf5(dir.path() / "bad.h5", columns);
+        CHECK(refusal(dir.path() / "bad.h5").message() == "row 2: not a finite number: nan");
+    }
+    SECTION("a missing variable: the ones present and the closest name") {
+        auto columns = base();
+        columns[2].name = "U_d";
+        // v7.3 is HDF5, which lists names in byte order.
+        write_mat(path, MAT_FT_MAT73, columns);
+        const auto e = refusal(path);
+        INFO(e.what());
+        CHECK(e.field() == "u_d");
+        CHECK(e.message().find("missing required variable") != std::string::npos);
+        CHECK(e.message().find("the file has: U_d, i_d, i_q, omega_e, u_q") != std::string::npos);
+        CHECK(e.message().find("did you mean 'U_d'?") != std::string::npos);
+    }
+    SECTION("a mapped variable that is absent") {
+        auto columns = base();
+        columns[0].name = "Id_meas";
+        write_mat(path, MAT_FT_MAT5, columns);
+        const auto e = refusal(path, parse_column_map("i_d=Id_mes", "command line", "--columns"));
+        CHECK(e.field() == "Id_mes");
+        CHECK(e.message().find("no such variable (mapped to i_d by --columns); did you mean 'Id_meas'?") != std::string::npos);
+        CHECK(read_measurement(path, parse_column_map("i_d=Id_meas", "command line", "--columns")).i_d[2] == 3.0);
+    }
+    SECTION("columns of different lengths") {
+        auto columns = base();
+        columns[4].numbers.push_back(4.0);
+        write_hdf5(dir.path() / "bad.h5", columns);
+        const auto e = refusal(dir.path() / "bad.h5");
+        CHECK(e.field() == "omega_e");
+        CHECK(e.message() == "4 rows, but i_d has 3; every column must have one value per row");
+    }
+    SECTION("a matrix where a vector belongs; an unused matrix is only a warning") {
+        mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+        for (const auto& c : base()) {
+            matvar_t* v = mat_variable(c, true);
+            Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+            Mat_VarFree(v);
+        }
+        const double block[6] = {1, 2, 3, 4, 5, 6};
+        std::size_t dims[2] = {3, 2};
+        matvar_t* v = Mat_VarCreate("temps", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(block), 0);
+        Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+        Mat_VarFree(v);
+        Mat_Close(mat);
+        const auto m = read_measurement(path);
+        REQUIRE(m.warnings.size() == 1);
+        CHECK(m.warnings[0] == path.string() + ": variable 'temps' is not used by mhbench and was ignored");
+        const auto e = refusal(path, parse_column_map("temp_winding=temps", "command line", "--columns"));
+        CHECK(e.field() == "temps (temp_winding)");
+        CHECK(e.message() == "a 3x2 matrix, not a vector");
+    }
+    SECTION("text where numbers belong, and an empty segment label") {
+        auto columns = base();
+        columns[1].numbers.clear();
+        columns[1].labels = {"x", "y", "z"};
+        write_hdf5(dir.path() / "bad.h5", columns);
+        CHECK(refusal(dir.path() / "bad.h5").message() == "holds text; mhbench reads numbers here (only segment may be text)");
+        columns = base();
+        columns.push_back({"op", {}, {"a", "", "b"}});
+        write_mat(path, MAT_FT_MAT5, columns);
+        const auto e = refusal(path, parse_column_map("segment=op", "command line", "--columns"));
+        CHECK(e.field() == "op (segment)");
+        CHECK(e.message() == "row 2: empty segment label");
+    }
+    SECTION("a value the unit conversion takes beyond the range of a double") {
+        auto columns = base();
+        columns[4].numbers[2] = 1.7e308;
+        write_hdf5(dir.path() / "fast.h5", columns);
+        auto map = parse_column_map("omega_e[rpm]", "command line", "--columns");
+        map.pole_pairs = 16;
+        const auto e = refusal(dir.path() / "fast.h5", map);
+        CHECK(e.field() == "omega_e");
+        CHECK(e.message() == "row 3: 1.7e+308 rpm is beyond the range of a double after conversion");
+    }
+    SECTION("HDF5 without datasets at the root and with several groups") {
+        {
+            H5::H5File file((dir.path() / "groups.h5").string(), H5F_ACC_TRUNC);
+            file.createGroup("a");
+            file.createGroup("b");
+        }
+        const auto e = refusal(dir.path() / "groups.h5");
+        CHECK(e.message() == "no datasets at the root but 2 groups (a, b); mhbench reads the datasets at the root or in a single group");
+    }
+    SECTION("damaged files are named as such, with the library's reason") {
+        std::string bytes = "\x89HDF\r\n\x1a\n";
+        bytes += std::string(100, '\x07');
+        dir.write("broken.h5", bytes);
+        const auto e = refusal(dir.path() / "broken.h5");
+        CHECK(e.message().find("cannot read the HDF5 file") != std::string::npos);
+        dir.write("broken.mat", "MATLAB 5.0 MAT-file, truncated");
+        CHECK(refusal(dir.path() / "broken.mat").message().find("cannot read the MAT file") != std::string::npos);
+        dir.write("v4.mat", "MATLAB 4 something");
+        CHECK(refusal(dir.path() / "v4.mat").message().find("neither v5/v7 nor v7.3") != std::string::npos);
+        dir.write("other.bin", std::string("\x7f" "ELF\x02\x01\x01\0\0\0", 10));
+        CHECK(refusal(dir.path() / "other.bin").message() == "binary data that is neither CSV text, a MAT file (v5, v7, v7.3) nor HDF5");
+    }
+}
+
+TEST_CASE("the column map itself is checked, naming the option or the file and line", "[pmsm][measurement][formats]") {
+    auto refused = [](const std::function<void()>& f) {
+        try {
+            f();
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        FAIL("accepted");
+        return std::string();
+    };
+    CHECK(refused([] { parse_column_map("i_dd=Id", "command line", "--columns"); })
+              .starts_with("command line: --columns: unknown mhbench column 'i_dd'; did you mean 'i_d'?"));
+    CHECK(refused([] { parse_column_map("i_d=Id[kA]", "command line", "--columns"); }) ==
+          "command line: --columns: i_d: unknown unit 'kA' (accepted: A (mhbench's own), mA)");
+    CHECK(refused([] { parse_column_map("i_d=Id,i_d=Iq", "command line", "--columns"); }) ==
+          "command line: --columns: i_d is mapped twice");
+    CHECK(refused([] { column_map_from_options("i_d=X,i_q=X", "", 0); }) ==
+          "--columns: i_q: 'X' is already the source of i_d; each file column feeds one mhbench column");
+    CHECK(refused([] { column_map_from_options("omega_e=speed[rpm]", "", 0); })
+              .starts_with("--columns: omega_e: rpm is converted to electrical rad/s with the pole-pair count"));
+    CHECK(refused([] { parse_column_map("i_d=", "command line", "--columns"); }) ==
+          "command line: --columns: 'i_d': no source name after '='");
+
+    mhb::testing::TemporaryDirectory dir;
+    const auto bad_key = dir.write("map.toml", "pole_pair = 4\n");
+    CHECK(refused([&] { read_column_map_file(bad_key); }).starts_with(bad_key.string() + ":1: pole_pair: unknown key 'pole_pair'; did you mean 'pole_pairs'?"));
+    const auto bad_unit = dir.write("unit.toml", "[columns]\ni_d = \"Id\"\nu_d = \"Ud[kV]\"\n");
+    CHECK(refused([&] { read_column_map_file(bad_unit); }) ==
+          bad_unit.string() + ":3: columns.u_d: u_d: unknown unit 'kV' (accepted: V (mhbench's own), mV)");
+    const auto bad_pairs = dir.write("pairs.toml", "pole_pairs = 0\n");
+    CHECK(refused([&] { read_column_map_file(bad_pairs); }) == bad_pairs.string() + ":1: pole_pairs: expects a whole number in [1, 1000]");
+}
+
+TEST_CASE("mhbench fit on a MAT file with --columns gives the CSV's parameters", "[pmsm][measurement][formats][cli]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "drive.csv";
+    write_measurement(csv, drive());
+    // A renamed copy, as a bench's logger names the signals.
+    write_mat(dir.path() / "drive.mat", MAT_FT_MAT73,
+              columns_of(drive(), {{"i_d", "Id_meas"}, {"u_q", "Vq_ref"}, {"omega_e", "speed_el"}, {"segment", "op"}}));
+    const auto from_csv = mhb::testing::run_mhbench("fit --data " + csv.string() + " --json " + (dir.path() / "csv.json").string(), dir.path() / "log");
+    INFO(from_csv.output);
+    REQUIRE(from_csv.exit_code == 0);
+    const auto from_mat = mhb::testing::run_mhbench("fit --data " + (dir.path() / "drive.mat").string() +
+                                                   " --columns i_d=Id_meas,u_q=Vq_ref,omega_e=speed_el,segment=op --json " +
+                                                   (dir.path() / "mat.json").string(),
+                                               dir.path() / "log");
+    INFO(from_mat.output);
+    REQUIRE(from_mat.exit_code == 0);
+    const auto a = nlohmann::json::parse(mhb::testing::read_file(dir.path() / "csv.json"));
+    const auto b = nlohmann::json::parse(mhb::testing::read_file(dir.path() / "mat.json"));
+    CHECK(a["parameters"] == b["parameters"]);
+    CHECK(a["rms"] == b["rms"]);
+
+    const auto typo = mhb::testing::run_mhbench("fit --data " + (dir.path() / "drive.mat").string() + " --columns i_d=Id_mess", dir.path() / "log");
+    CHECK(typo.exit_code == 2);
+    CHECK(typo.output.find("error: " + (dir.path() / "drive.mat").string() +
+                           ": Id_mess: no such variable (mapped to i_d by --columns); did you mean 'Id_meas'?") != std::string::npos);
+    const auto no_pairs = mhb::testing::run_mhbench("diagnose --data " + csv.string() + " --columns omega_e[rpm]", dir.path() / "log");
+    CHECK(no_pairs.exit_code == 2);
+    CHECK(no_pairs.output.find("rpm is converted to electrical rad/s with the pole-pair count") != std::string::npos);
+}
+
+TEST_CASE("diagnose suggests next commands that read the file with the same column map", "[pmsm][measurement][formats][cli]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto h5 = dir.path() / "offset.h5";
+    write_hdf5(h5, columns_of(mhb::pmsm::testing::diagnosis_data({{"encoder_offset", {}}}), {{"theta_e", "angle"}}), "bench");
+    const auto run = mhb::testing::run_mhbench("diagnose --data " + h5.string() + " --columns theta_e=angle --report " +
+                                                   (dir.path() / "report").string(),
+                                               dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    const std::string next = "mhbench fit --data " + h5.string() + " --columns theta_e=angle --model base+encoder_offset";
+    CHECK(run.output.find("next: " + next) != std::string::npos);
+    CHECK(mhb::testing::read_file(dir.path() / "report" / "report.md").find(next) != std::string::npos);
+}
