@@ -96,8 +96,8 @@ TEST_CASE("a bad study file is refused naming the file, line and field", "[pmsm]
             "temperature.winding: set differently by ");
 }
 
-TEST_CASE("on the device plant, over several noise seeds, clear effects are found alone, in a pair and as a triple; clean data raise no "
-          "alarm; a sensor gain error is not in the library",
+TEST_CASE("on the device plant, over several noise seeds, clear effects are found alone, in a pair and as a triple, clean data raise no "
+          "alarm, and a sensor gain error is not in the library",
           "[pmsm][study][hidden]") {
     // The drives come from the device plant (switching inverter, thermal network, sensors), which
     // shares no code with the model terms the diagnosis fits.
