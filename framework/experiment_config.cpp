@@ -182,14 +182,19 @@ std::vector<std::map<std::string, ParameterValue>> expand_grid(
 }
 
 ExperimentSpec load_experiment(const fs::path& file) {
-    ExperimentSpec spec;
-    spec.file = file;
     ConfigReader reader(file);
     std::error_code ec;
     if (fs::is_directory(file, ec)) reader.fail(0, "", "is a directory; expected an experiment TOML file");
     std::ifstream in(file, std::ios::binary);
     if (!in) reader.fail(0, "", std::string("cannot open the experiment file: ") + std::strerror(errno));
     const std::string text((std::istreambuf_iterator<char>(in)), {});
+    return parse_experiment(text, file);
+}
+
+ExperimentSpec parse_experiment(const std::string& text, const fs::path& file) {
+    ExperimentSpec spec;
+    spec.file = file;
+    ConfigReader reader(file);
     if (text.find_first_not_of(" \t\r\n") == std::string::npos)
         reader.fail(0, "", "empty file; an experiment needs trials, seed, [budget], [[optimizer]] and [[problem]] "
                            "(docs/config-reference.md)");

@@ -60,6 +60,8 @@ inline constexpr std::int64_t max_budget_evaluations = 1'000'000'000;
 
 // Throws InputError (file, line, field) for anything malformed, unknown or out of range.
 ExperimentSpec load_experiment(const std::filesystem::path& file);
+// The same from text already read; `file` names it in messages and anchors a relative `output`.
+ExperimentSpec parse_experiment(const std::string& text, const std::filesystem::path& file);
 
 // Expands list-valued entries into the cartesian product, in declaration order.
 std::vector<std::map<std::string, ParameterValue>> expand_grid(

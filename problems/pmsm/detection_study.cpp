@@ -258,8 +258,10 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
         toml::table merged;
         std::map<std::string, std::string> conflicts;  // dotted key -> "a and b"
         std::string first;
-        for (const auto& [name, text] : parts) {
-            merge(merged, parse_settings(text, file), "", [&](const std::string& key) { conflicts.emplace(key, first + " and " + name); });
+        // A plain reference, not a structured binding: clang 14 cannot capture a binding in a lambda.
+        for (const auto& part : parts) {
+            const std::string& name = part.first;
+            merge(merged, parse_settings(part.second, file), "", [&](const std::string& key) { conflicts.emplace(key, first + " and " + name); });
             if (first.empty()) first = name;
         }
         for (const auto& g : spec.together) {

@@ -61,8 +61,10 @@ Inductance FluxMap::incremental_inductance(Complex i) const {
 }
 
 FluxMap FluxMap::read(const std::filesystem::path& path, double nominal_psi_f) {
-    const std::string file = path.string();
-    const std::string text = read_text_file(path, "flux map");
+    return parse(read_text_file(path, "flux map"), path.string(), nominal_psi_f);
+}
+
+FluxMap FluxMap::parse(const std::string& text, const std::string& file, double nominal_psi_f) {
 
     // Same CSV conventions as measurements (header row, commas, SI units); the columns differ.
     std::vector<std::string> lines;

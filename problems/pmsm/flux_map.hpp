@@ -17,6 +17,8 @@ public:
     // `nominal_psi_f` is the magnet flux the caller will pass at the reference temperature: a different
     // psi_f scales the map's own magnet flux psi_d(0, 0) by psi_f / nominal_psi_f.
     static FluxMap read(const std::filesystem::path& path, double nominal_psi_f);
+    // The same from CSV text already read; `source` names it in messages.
+    static FluxMap parse(const std::string& text, const std::string& source, double nominal_psi_f);
     FluxMap(std::vector<double> i_d, std::vector<double> i_q, std::vector<double> psi_d, std::vector<double> psi_q,
             double nominal_psi_f);
 
