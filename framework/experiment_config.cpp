@@ -124,6 +124,14 @@ public:
                 }
                 axes.emplace_back(param, std::move(values));
             }
+            std::int64_t grid_size = 1;
+            for (const auto& [param, values] : axes) {
+                grid_size *= static_cast<std::int64_t>(values.size());
+                if (grid_size > max_grid_variants)  // checked per factor, so the product cannot overflow
+                    fail(line, where, fmt::format("the lists up to '{}' already expand into {} variants; the limit is {} "
+                                                  "per entry (split the entry or shorten the lists)",
+                                                  param, grid_size, max_grid_variants));
+            }
             for (auto& given : expand_grid(axes)) {
                 std::string non_default;
                 try {

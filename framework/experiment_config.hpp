@@ -57,6 +57,9 @@ struct ExperimentSpec {
 inline constexpr std::int64_t max_trials = 100'000;
 inline constexpr std::int64_t max_budget_iterations = 10'000'000;
 inline constexpr std::int64_t max_budget_evaluations = 1'000'000'000;
+// Variants one [[optimizer]] or [[problem]] entry's lists may expand into: a few short lists
+// multiply into billions, which would exhaust memory while the config is still being read.
+inline constexpr std::int64_t max_grid_variants = 10'000;
 
 // Throws InputError (file, line, field) for anything malformed, unknown or out of range.
 ExperimentSpec load_experiment(const std::filesystem::path& file);

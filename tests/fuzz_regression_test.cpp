@@ -68,3 +68,7 @@ TEST_CASE("the bad inputs named in issue 12 are refused, not accepted", "[fuzz]"
     CHECK(verdict_on("measurement", "binary_bytes.csv") == Verdict::refused);
     CHECK(verdict_on("experiment", "empty.toml") == Verdict::refused);
 }
+
+TEST_CASE("an experiment whose lists multiply into 10^8 variants is refused before they are expanded", "[fuzz]") {
+    CHECK(verdict_on("experiment", "grid_of_10_pow_8_variants.toml") == Verdict::refused);
+}
