@@ -166,6 +166,7 @@ StudySpec read_study(const std::filesystem::path& path) {
     spec.name = required_string("name");
     if (const auto* n = root.get("description")) spec.description = string_of(file, *n, "description");
     spec.profile = directory / required_string("profile");
+    spec.profile_text = read_text_file(spec.profile, "simulation profile");
     spec.output = directory / required_string("output");
     if (const auto* n = root.get("model")) spec.model = string_of(file, *n, "model");
     try {
@@ -309,7 +310,7 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
 }
 
 std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_t seed) {
-    toml::table profile = parse_settings(read_text_file(spec.profile, "simulation profile"), spec.profile.string());
+    toml::table profile = parse_settings(spec.profile_text, spec.profile.string());
     merge(profile, parse_settings(c.settings, spec.file.string()), "", {});
     toml::table noise;
     noise.insert("seed", static_cast<std::int64_t>(seed));

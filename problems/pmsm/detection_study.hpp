@@ -51,6 +51,7 @@ struct StudySpec {
     std::filesystem::path file;        // the study file
     std::string name, description;
     std::filesystem::path profile;     // the simulation profile, resolved
+    std::string profile_text;          // its text, read once (every drive merges its settings into it)
     std::string model = "base";        // the model diagnosed
     std::vector<std::uint64_t> seeds;  // noise seeds
     std::vector<StudyEffect> effects;
