@@ -180,4 +180,10 @@ struct Diagnosis {
 // Fits `spec` to `data` and answers where it fails, what is missing and how sure that is.
 Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const DiagnosisOptions& options);
 
+// Squared prediction error of each segment (range of rows with one label) when `spec` is refitted
+// on all the other segments, starting from `values` (its fit on all rows): the Gauss-Newton step of
+// the model linearised at `values`, exact where the prediction is linear in the free parameters.
+// Empty with fewer than three segments.
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values);
+
 }  // namespace mhb::pmsm

@@ -235,4 +235,20 @@ const char* to_string(CovarianceMethod method) {
     return method == CovarianceMethod::White ? "white" : "newey-west";
 }
 
+// The pseudo-inverse of a symmetric positive semi-definite matrix through its column-scaled form:
+// directions the data do not determine (eigenvalues below 1e-13 of the largest) get no weight.
+Eigen::MatrixXd scaled_pseudo_inverse(const Eigen::MatrixXd& gram) {
+    const Eigen::Index p = gram.rows();
+    Eigen::VectorXd scale = gram.diagonal().cwiseMax(0.0).cwiseSqrt();
+    for (Eigen::Index j = 0; j < p; ++j)
+        if (!(scale[j] > 0.0)) scale[j] = 1.0;
+    const Eigen::MatrixXd scaled = scale.cwiseInverse().asDiagonal() * gram * scale.cwiseInverse().asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+    const double largest = eig.eigenvalues().maxCoeff();
+    Eigen::VectorXd inverse(p);
+    for (Eigen::Index j = 0; j < p; ++j) inverse[j] = eig.eigenvalues()[j] > 1e-13 * largest ? 1.0 / eig.eigenvalues()[j] : 0.0;
+    return scale.cwiseInverse().asDiagonal() * eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose() *
+           scale.cwiseInverse().asDiagonal();
+}
+
 }  // namespace mhb::pmsm

@@ -30,6 +30,11 @@ struct LeastSquares {
 // magnitude), so the solution is accurate even when the Gram matrix is ill conditioned.
 LeastSquares solve_least_squares(const Eigen::MatrixXd& phi, const Eigen::VectorXd& y);
 
+// The pseudo-inverse of a symmetric positive semi-definite matrix (a Gram matrix) through its
+// column-scaled form, so that columns of very different magnitude do not decide the rank: directions
+// the data do not determine (scaled eigenvalues below 1e-13 of the largest) get no weight.
+Eigen::MatrixXd scaled_pseudo_inverse(const Eigen::MatrixXd& gram);
+
 // The exact minimiser of the sum of squares inside a box: every combination of free coordinates and
 // coordinates at a bound is tried (3^p of them, p <= 10), and the best point satisfying the KKT
 // conditions is returned. `at_bound[j]` is -1 (lower), +1 (upper) or 0 (free).

@@ -4,10 +4,15 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <fmt/format.h>
 
+#include "framework/random.hpp"
 #include "framework/registry.hpp"
 #include "framework/trial.hpp"
 
@@ -33,77 +38,123 @@ std::pair<double, double> difference_points(double x, double lo, double hi, bool
 }
 
 // Variable projection of a model on its data: for given effect parameters, the base parameters that
-// minimise the squared residual (the prediction is affine in them) and that residual.
+// minimise the squared residual (the prediction is affine in them) and that residual. The data are
+// reduced a block at a time, blocks in parallel, to the normal equations of the base parameters, so
+// that an evaluation keeps no row-sized array. The sums are taken about reference base values (the
+// last solution) so that the residual sum of squares, recovered from them as a quadratic, does not
+// lose its digits to cancellation.
 class Projection {
 public:
+    struct BlockSums {
+        Eigen::Matrix4d gram;    // phi' phi
+        Eigen::Vector4d moment;  // phi' r0, r0 = logged - offset - phi reference
+        double total = 0.0;      // r0' r0
+    };
     struct Workspace {
-        ModelState state;
-        Eigen::VectorXd values;    // all parameters; the base entries are the solution after project()
-        Eigen::MatrixXd phi;       // d prediction / d base parameter (2n x 4)
-        Eigen::VectorXd offset;    // prediction with the base parameters at zero
-        Eigen::VectorXd residual;  // logged minus predicted
+        Eigen::VectorXd values;     // all parameters; the base entries are the solution after project()
+        Eigen::Vector4d reference;  // base values the sums are taken about
+        std::vector<BlockSums> blocks;
+        Eigen::VectorXd residual;   // logged minus predicted (stacked d, q), when project() is asked for it
     };
 
-    explicit Projection(const SteadyStateModel& model) : model_(model), n_(model.data().size()) {
-        y_.resize(2 * n_);
-        y_ << model.data().u_d, model.data().u_q;
-    }
+    explicit Projection(const SteadyStateModel& model) : model_(model), n_(model.data().size()) {}
 
     Eigen::Index samples() const { return n_; }
-    const Eigen::VectorXd& logged() const { return y_; }
 
     Workspace workspace(const Eigen::VectorXd& values) const {
         Workspace w;
-        w.state = model_.make_state();
         w.values = values;
-        w.phi.resize(2 * n_, 4);
-        w.offset.resize(2 * n_);
-        w.residual.resize(2 * n_);
+        w.reference = values.head<4>();
+        w.blocks.resize(static_cast<std::size_t>(model_.blocks()));
         return w;
     }
 
-    // Fills w.phi, w.offset, the base entries of w.values and w.residual; returns the residual sum of
-    // squares. Allocation-free: the optimiser calls it for every candidate.
-    double project(Workspace& w) const {
-        w.values.head<4>().setZero();
-        model_.predict(w.values.data(), w.state);
-        w.offset.head(n_) = w.state.u_d.matrix();
-        w.offset.tail(n_) = w.state.u_q.matrix();
-        for (int j = 0; j < 4; ++j) {
-            w.values.head<4>().setZero();
-            w.values[j] = 1.0;
-            model_.predict(w.values.data(), w.state);
-            w.phi.col(j).head(n_) = w.state.u_d.matrix() - w.offset.head(n_);
-            w.phi.col(j).tail(n_) = w.state.u_q.matrix() - w.offset.tail(n_);
+    // Solves the base entries of w.values for its effect entries and returns the residual sum of
+    // squares; with `residual`, also fills w.residual. Allocation-free after the first call: the
+    // optimiser calls it for every candidate. The same result on any number of threads (fixed blocks,
+    // summed in order).
+    double project(Workspace& w, bool residual = false) const {
+        const auto& data = model_.data();
+        const Eigen::Vector4d reference = w.reference;
+        tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model_.blocks()), [&](const tbb::blocked_range<Eigen::Index>& range) {
+            auto& scratch = model_.scratch();
+            for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
+                AffinePrediction& a = scratch.affine[model_.scratch_index(b)];
+                const Eigen::Index first = model_.block_first(b);
+                model_.predict_affine(w.values.data(), a, first);
+                BlockSums& sums = w.blocks[static_cast<std::size_t>(b)];
+                const Eigen::Index rows = a.rows();
+                a.residual_d = data.u_d.segment(first, rows).array() - a.offset_d;
+                a.residual_q = data.u_q.segment(first, rows).array() - a.offset_q;
+                for (int j = 0; j < 4; ++j) {
+                    a.residual_d -= reference[j] * a.phi_d.col(j);
+                    a.residual_q -= reference[j] * a.phi_q.col(j);
+                }
+                for (int i = 0; i < 4; ++i) {
+                    for (int j = i; j < 4; ++j)
+                        sums.gram(i, j) = sums.gram(j, i) =
+                            (a.phi_d.col(i) * a.phi_d.col(j)).sum() + (a.phi_q.col(i) * a.phi_q.col(j)).sum();
+                    sums.moment[i] = (a.phi_d.col(i) * a.residual_d).sum() + (a.phi_q.col(i) * a.residual_q).sum();
+                }
+                sums.total = a.residual_d.square().sum() + a.residual_q.square().sum();
+            }
+        });
+        BlockSums all{Eigen::Matrix4d::Zero(), Eigen::Vector4d::Zero(), 0.0};
+        for (const auto& sums : w.blocks) {
+            all.gram += sums.gram;
+            all.moment += sums.moment;
+            all.total += sums.total;
         }
-        w.residual = y_ - w.offset;
         // Normal equations of the column-scaled regressor, solved by a pseudo-inverse so that a design
-        // that does not determine all four base parameters still gives the minimum-norm solution.
+        // that does not determine all four base parameters still gives the minimum-norm step.
         Eigen::Vector4d scale, rhs;
         for (int a = 0; a < 4; ++a) {
-            scale[a] = w.phi.col(a).norm();
+            scale[a] = std::sqrt(all.gram(a, a));
             if (!(scale[a] > 0.0)) scale[a] = 1.0;
         }
         Eigen::Matrix4d gram;
         for (int a = 0; a < 4; ++a) {
-            rhs[a] = w.phi.col(a).dot(w.residual) / scale[a];
-            for (int b = a; b < 4; ++b) gram(a, b) = gram(b, a) = w.phi.col(a).dot(w.phi.col(b)) / (scale[a] * scale[b]);
+            rhs[a] = all.moment[a] / scale[a];
+            for (int b = 0; b < 4; ++b) gram(a, b) = all.gram(a, b) / (scale[a] * scale[b]);
         }
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(gram);
         const double largest = eig.eigenvalues().maxCoeff();
         Eigen::Vector4d inverse;
         for (int a = 0; a < 4; ++a) inverse[a] = eig.eigenvalues()[a] > 1e-13 * largest ? 1.0 / eig.eigenvalues()[a] : 0.0;
-        const Eigen::Vector4d base =
+        const Eigen::Vector4d step =
             (eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose() * rhs).cwiseQuotient(scale);
-        w.residual.noalias() -= w.phi * base;
-        w.values.head<4>() = base;
+        w.values.head<4>() = reference + step;
+        w.reference = w.values.head<4>();
+        const double rss = std::max(all.total - 2.0 * step.dot(all.moment) + step.dot(all.gram * step), 0.0);
+        if (!residual) return rss;
+        w.residual.resize(2 * n_);
+        model_.predict_rows(w.values.data(), w.residual.data(), w.residual.data() + n_);
+        w.residual.head(n_) = data.u_d - w.residual.head(n_);
+        w.residual.tail(n_) = data.u_q - w.residual.tail(n_);
         return w.residual.squaredNorm();
+    }
+
+    // The offset and base-parameter columns of all rows at w.values' effect parameters (stacked d, q).
+    void columns(const Workspace& w, Eigen::MatrixXd& phi, Eigen::VectorXd& offset) const {
+        phi.resize(2 * n_, 4);
+        offset.resize(2 * n_);
+        tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model_.blocks()), [&](const tbb::blocked_range<Eigen::Index>& range) {
+            auto& scratch = model_.scratch();
+            for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
+                AffinePrediction& a = scratch.affine[model_.scratch_index(b)];
+                const Eigen::Index first = model_.block_first(b), rows = a.rows();
+                model_.predict_affine(w.values.data(), a, first);
+                offset.segment(first, rows) = a.offset_d.matrix();
+                offset.segment(n_ + first, rows) = a.offset_q.matrix();
+                phi.block(first, 0, rows, 4) = a.phi_d.matrix();
+                phi.block(n_ + first, 0, rows, 4) = a.phi_q.matrix();
+            }
+        });
     }
 
 private:
     const SteadyStateModel& model_;
     Eigen::Index n_;
-    Eigen::VectorXd y_;
 };
 
 // The optimiser's view: the projected mean squared error as a function of the searched effect
@@ -159,7 +210,10 @@ ParameterInfo parameter_info(const SteadyStateModel& model) {
 }
 
 // Levenberg-Marquardt on the projected residual over the `moving` effect parameters, each kept in its
-// range (angles of a full turn wrap). Returns the iterations used.
+// range (angles of a full turn wrap). Each iteration reduces the rows once to the normal equations of
+// all parameters (range_normal_equations) and eliminates the base parameters from them (Kaufman's
+// form of variable projection: the Schur complement), so no row-sized array is kept. Returns the
+// iterations used.
 int polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
            const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
     double rss = projection.project(w);
@@ -170,27 +224,28 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
     auto place = [&](Eigen::VectorXd& v, Eigen::Index p, double x) {
         v[p] = periodic[static_cast<std::size_t>(p)] ? wrap_into(x, lo[p], hi[p]) : std::clamp(x, lo[p], hi[p]);
     };
-    const Eigen::Index rows = w.residual.size();
-    Eigen::MatrixXd jacobian(rows, m);
-    Eigen::VectorXd residual(rows), values(w.values.size());
+    // Converged when a step can gain less than 1e-8 of one unit of chi-squared (the noise variance
+    // taken as rss / residual entries), which puts the parameters within about 1e-4 of their standard
+    // error of the optimum: no test or interval can see the rest, and on long logs a relative
+    // criterion alone would chase digits for dozens of passes over the rows.
+    const double entries = 2.0 * static_cast<double>(projection.samples());
+    auto negligible = [&](double gain) { return gain < 1e-12 * rss || gain * entries < 1e-8 * rss; };
+    std::vector<Eigen::Index> columns{0, 1, 2, 3};
+    columns.insert(columns.end(), moving.begin(), moving.end());
+    const std::vector<Eigen::Index> all_rows{0};
+    Eigen::VectorXd values(w.values.size());
     double lambda = 1e-3;
     int iteration = 0;
     for (; iteration < 100; ++iteration) {
-        residual = w.residual;
         values = w.values;
-        for (Eigen::Index j = 0; j < m; ++j) {
-            const Eigen::Index p = moving[static_cast<std::size_t>(j)];
-            const auto [down, up] = difference_points(values[p], lo[p], hi[p], periodic[static_cast<std::size_t>(p)]);
-            w.values = values;
-            w.values[p] = up;
-            projection.project(w);
-            jacobian.col(j) = w.residual;
-            w.values[p] = down;
-            projection.project(w);
-            jacobian.col(j) = (jacobian.col(j) - w.residual) / (up - down);
-        }
-        const Eigen::VectorXd gradient = jacobian.transpose() * residual;
-        const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+        const auto sums = range_normal_equations(model, values, columns, all_rows);
+        const Eigen::MatrixXd& jj = sums.gram[0];
+        const Eigen::VectorXd& jr = sums.moment[0];
+        const Eigen::MatrixXd base_inverse = scaled_pseudo_inverse(jj.topLeftCorner(4, 4));
+        const Eigen::MatrixXd cross = jj.bottomLeftCorner(m, 4) * base_inverse;
+        const Eigen::MatrixXd normal = jj.bottomRightCorner(m, m) - cross * jj.topRightCorner(4, m);
+        // Of the residual's sum of squares (the residual is logged minus predicted).
+        const Eigen::VectorXd gradient = -(jr.tail(m) - cross * jr.head(4));
         // Parameters at a bound that the gradient pushes outward are held this iteration.
         std::vector<Eigen::Index> step_on;
         for (Eigen::Index j = 0; j < m; ++j) {
@@ -209,6 +264,9 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
                 g[r] = gradient[step_on[static_cast<std::size_t>(r)]];
                 for (Eigen::Index c = 0; c < f; ++c) a(r, c) = normal(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
             }
+            // The Gauss-Newton step's predicted gain, before any trial pass over the rows.
+            const Eigen::VectorXd full_step = scaled_pseudo_inverse(a) * -g;
+            if (negligible(-g.dot(full_step))) break;
             const Eigen::VectorXd diagonal = a.diagonal().cwiseMax(1e-15 * a.diagonal().maxCoeff() + 1e-300);
             for (int attempt = 0; attempt < 12 && !improved; ++attempt) {
                 Eigen::MatrixXd damped = a;
@@ -233,9 +291,9 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
             projection.project(w);
             break;
         }
-        const double gain = (rss - new_rss) / std::max(rss, 1e-300);
+        const double gain = rss - new_rss;
         rss = new_rss;
-        if (gain < 1e-12) {
+        if (negligible(gain)) {
             ++iteration;
             break;
         }
@@ -318,7 +376,12 @@ ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Proj
     const int iterations = polish(projection, model, w, free_effect_parameters(free), info.periodic);
     // The base parameters once more by column-pivoting QR, for the reported values.
     projection.project(w);
-    const LeastSquares exact = solve_least_squares(w.phi, projection.logged() - w.offset);
+    Eigen::MatrixXd phi;
+    Eigen::VectorXd offset;
+    projection.columns(w, phi, offset);
+    Eigen::VectorXd target(2 * model.data().size());
+    target << model.data().u_d, model.data().u_q;
+    const LeastSquares exact = solve_least_squares(phi, target - offset);
     w.values.head<4>() = exact.solution;
     ModelFit fit = assemble(model, spec, w.values, covariance);
     fit.evaluations = evaluations;
@@ -347,10 +410,9 @@ bool ModelFit::at_bound(Eigen::Index j) const {
 }
 
 Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::VectorXd& values) {
-    ModelState s = model.make_state();
-    model.predict(values.data(), s);
-    Eigen::VectorXd out(2 * model.data().size());
-    out << s.u_d.matrix(), s.u_q.matrix();
+    const Eigen::Index n = model.data().size();
+    Eigen::VectorXd out(2 * n);
+    model.predict_rows(values.data(), out.data(), out.data() + n);
     return out;
 }
 
@@ -379,6 +441,87 @@ Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::
         jacobian.col(static_cast<Eigen::Index>(c)) = (predict_stacked(model, plus) - predict_stacked(model, minus)) / (up - down);
     }
     return jacobian;
+}
+
+RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
+                                            const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts) {
+    const auto& data = model.data();
+    const auto p = static_cast<Eigen::Index>(columns.size());
+    const auto& lo = model.bounds().lower;
+    const auto& hi = model.bounds().upper;
+    // Each block's share, per range it touches; merged in block order so that any thread count
+    // gives the same sums.
+    struct Share {
+        std::size_t range = 0;
+        Eigen::MatrixXd gram;
+        Eigen::VectorXd moment;
+        double total = 0.0;
+    };
+    std::vector<std::vector<Share>> shares(static_cast<std::size_t>(model.blocks()));
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model.blocks()), [&](const tbb::blocked_range<Eigen::Index>& blocks) {
+        auto& scratch = model.scratch();
+        Eigen::VectorXd at = values;
+        Eigen::MatrixXd jacobian;
+        Eigen::VectorXd residual;
+        for (Eigen::Index b = blocks.begin(); b != blocks.end(); ++b) {
+            const int size = model.scratch_index(b);
+            AffinePrediction& a = scratch.affine[size];
+            ModelState& s = scratch.state[size];
+            const Eigen::Index first = model.block_first(b), rows = a.rows();
+            jacobian.resize(2 * rows, p);
+            model.predict(values.data(), s, first);
+            residual.resize(2 * rows);
+            residual << data.u_d.segment(first, rows) - s.u_d.matrix(), data.u_q.segment(first, rows) - s.u_q.matrix();
+            model.predict_affine(values.data(), a, first);
+            for (Eigen::Index c = 0; c < p; ++c) {
+                const Eigen::Index j = columns[static_cast<std::size_t>(c)];
+                if (j < 4) {
+                    jacobian.col(c) << a.phi_d.col(j).matrix(), a.phi_q.col(j).matrix();
+                    continue;
+                }
+                const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
+                at[j] = up;
+                model.predict(at.data(), s, first);
+                jacobian.col(c) << s.u_d.matrix(), s.u_q.matrix();
+                at[j] = down;
+                model.predict(at.data(), s, first);
+                jacobian.col(c).head(rows) -= s.u_d.matrix();
+                jacobian.col(c).tail(rows) -= s.u_q.matrix();
+                jacobian.col(c) /= up - down;
+                at[j] = values[j];
+            }
+            auto& out = shares[static_cast<std::size_t>(b)];
+            out.clear();
+            // The ranges this block's rows fall in, each a run of consecutive rows.
+            auto range = static_cast<std::size_t>(std::upper_bound(starts.begin(), starts.end(), first) - starts.begin() - 1);
+            for (Eigen::Index k = 0; k < rows;) {
+                const Eigen::Index end =
+                    range + 1 < starts.size() ? std::min(rows, starts[range + 1] - first) : rows;
+                const Eigen::Index count = end - k;
+                Share share;
+                share.range = range;
+                share.gram = jacobian.middleRows(k, count).transpose() * jacobian.middleRows(k, count) +
+                             jacobian.middleRows(rows + k, count).transpose() * jacobian.middleRows(rows + k, count);
+                share.moment = jacobian.middleRows(k, count).transpose() * residual.segment(k, count) +
+                               jacobian.middleRows(rows + k, count).transpose() * residual.segment(rows + k, count);
+                share.total = residual.segment(k, count).squaredNorm() + residual.segment(rows + k, count).squaredNorm();
+                out.push_back(std::move(share));
+                k = end;
+                ++range;
+            }
+        }
+    });
+    RangeNormalEquations sums;
+    sums.gram.assign(starts.size(), Eigen::MatrixXd::Zero(p, p));
+    sums.moment.assign(starts.size(), Eigen::VectorXd::Zero(p));
+    sums.total.assign(starts.size(), 0.0);
+    for (const auto& block : shares)
+        for (const auto& share : block) {
+            sums.gram[share.range] += share.gram;
+            sums.moment[share.range] += share.moment;
+            sums.total[share.range] += share.total;
+        }
+    return sums;
 }
 
 AxisRms axis_rms(const Eigen::VectorXd& residual, Eigen::Index samples) {
@@ -413,6 +556,25 @@ std::vector<SegmentResidual> segment_residuals(const Measurement& data, const Ei
     return out;
 }
 
+std::vector<Eigen::Index> search_subsample(Eigen::Index rows, const FitOptions& options) {
+    std::vector<Eigen::Index> out;
+    if (options.search_rows <= 0 || rows <= options.search_rows) {
+        out.resize(static_cast<std::size_t>(rows));
+        std::iota(out.begin(), out.end(), Eigen::Index{0});
+        return out;
+    }
+    // Selection sampling (Knuth's algorithm S): each row kept with the probability that leaves
+    // exactly search_rows, in order, in one pass.
+    Rng rng(derive_seed(options.seed, "search rows", "", 0));
+    Eigen::Index needed = options.search_rows;
+    for (Eigen::Index k = 0; k < rows && needed > 0; ++k)
+        if (static_cast<double>(rows - k) * rng.uniform() < static_cast<double>(needed)) {
+            out.push_back(k);
+            --needed;
+        }
+    return out;
+}
+
 ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOptions& options, const Eigen::VectorXd* start,
                    const std::vector<Eigen::Index>& search) {
     const auto model = make_model(spec, data);
@@ -427,21 +589,36 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
                       spec.effects.empty() || free_effect_parameters(free).empty() ? "linear least squares (exact)"
                                                                                    : "local refinement from the given start");
 
-    const EffectSearch problem(projection, *model, initial, searched);
+    const auto rows = search_subsample(data.size(), options);
+    std::unique_ptr<SteadyStateModel> sample_model;
+    std::optional<Projection> sample_projection;
+    if (static_cast<Eigen::Index>(rows.size()) < data.size()) {
+        sample_model = make_model(spec, select_rows(data, rows));
+        sample_projection.emplace(*sample_model);
+    }
+    const EffectSearch problem(sample_projection ? *sample_projection : projection, *model, initial, searched);
     auto optimizer = make_optimizer(options.optimizer);
     const auto k = static_cast<std::int64_t>(searched.size());
     const std::int64_t budget = options.evaluations > 0 ? options.evaluations : 150 + 50 * k;
     const TrialRecord record = run_trial(*optimizer, problem, TrialSetup{Budget{0, budget}, options.seed, false});
     // The optimiser's best, or the start when that is better (the start is a declared typical value).
     const double start_rss = projection.project(w);
-    std::string method = fmt::format("{} over {} effect parameter{} ({} evaluations)", options.optimizer, k, k == 1 ? "" : "s",
-                                     record.evaluations);
+    std::string method = fmt::format("{} over {} effect parameter{} ({} evaluations{})", options.optimizer, k, k == 1 ? "" : "s",
+                                     record.evaluations,
+                                     sample_model ? fmt::format(" on {} of the {} rows", rows.size(), data.size()) : "");
     if (!record.ok) method += " [the optimiser failed: " + record.error + "]";
-    if (record.best_position.size() == k && record.best_fitness * static_cast<double>(projection.samples()) < start_rss) {
-        w.values = initial;
-        for (std::size_t j = 0; j < searched.size(); ++j) w.values[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
-    } else {
-        w.values = initial;
+    // Compared on all rows: the subsample's optimum is only a candidate. It is polished on the
+    // subsample first, where an iteration is cheap, so that few are left for all rows.
+    w.values = initial;
+    if (record.best_position.size() == k) {
+        auto best = projection.workspace(initial);
+        for (std::size_t j = 0; j < searched.size(); ++j) best.values[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
+        if (sample_projection) {
+            auto sample = sample_projection->workspace(best.values);
+            polish(*sample_projection, *sample_model, sample, free_effect_parameters(free), parameter_info(*model).periodic);
+            best.values = sample.values;
+        }
+        if (projection.project(best) < start_rss) w.values = best.values;
     }
     return finish(*model, spec, projection, w, free, options.covariance, record.evaluations, method);
 }

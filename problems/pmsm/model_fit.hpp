@@ -22,6 +22,12 @@ struct FitOptions {
     std::int64_t evaluations = 0;  // optimiser budget; 0: 150 + 50 per searched parameter
     std::uint64_t seed = 1;
     CovarianceMethod covariance = CovarianceMethod::NeweyWest;
+    // The optimiser searches on at most this many rows, drawn at random without replacement (the
+    // same rows for the same seed), and Levenberg-Marquardt then polishes on all rows: the global
+    // search only has to find the basin, and its cost stops growing with the log's length. Random
+    // rather than every k-th row, so that the subsample cannot alias with the electrical angle.
+    // 0: always all rows.
+    std::int64_t search_rows = 3000;
 };
 
 struct AxisRms {
@@ -66,6 +72,9 @@ struct ModelFit {
 // parameters) are searched by the optimiser; the other free effect parameters start at `start` (all
 // parameters; nullptr: the effects' defaults) and are only polished, as are the searched ones. An
 // empty `search` with a nullptr `start` searches every free effect parameter.
+// The rows the optimiser searches on (FitOptions::search_rows): all of them, or a sorted random subset.
+std::vector<Eigen::Index> search_subsample(Eigen::Index rows, const FitOptions& options);
+
 ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOptions& options,
                    const Eigen::VectorXd* start = nullptr, const std::vector<Eigen::Index>& search = {});
 
@@ -83,6 +92,18 @@ Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::Vect
 // step of 1e-4 of the declared range for effect parameters.
 Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                     const std::vector<Eigen::Index>& columns);
+
+// The model linearised at `values` in the listed parameters (the prediction Jacobian J, columns as
+// prediction_jacobian) and reduced over each range of rows: J'J, J'r and r'r with r the residual at
+// `values`. `starts` are the first rows of consecutive ranges (starts[0] = 0) that cover all rows.
+// Computed a block of rows at a time, blocks in parallel, without a row-sized array.
+struct RangeNormalEquations {
+    std::vector<Eigen::MatrixXd> gram;
+    std::vector<Eigen::VectorXd> moment;
+    std::vector<double> total;
+};
+RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
+                                            const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts);
 
 // Residual summaries of a stacked residual over the rows of `data`.
 AxisRms axis_rms(const Eigen::VectorXd& residual, Eigen::Index samples);

@@ -3,9 +3,12 @@
 //   u_d = R_s i_d - omega L_q i_q,   u_q = R_s i_q + omega L_d i_d + omega psi_f,
 // with any chosen effects applied stage by stage (effects/effect.hpp). Parameters are the four base
 // parameters followed by each effect's real parameters in declaration order.
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include "framework/problem.hpp"
 #include "problems/pmsm/effects/effect.hpp"
@@ -16,8 +19,24 @@ namespace mhb::pmsm {
 Bounds base_parameter_bounds();
 inline const std::vector<std::string> base_parameter_names{"Rs", "Ld", "Lq", "psi_f"};
 
+// The prediction split over a block of rows: u = offset + phi * (Rs, Ld, Lq, psi_f), for the effect
+// parameters it was made with (SteadyStateModel::predict_affine).
+struct AffinePrediction {
+    ModelState inputs;  // the block after the stages before the base parameters (sensors)
+    ModelState lane;    // one run of the later stages
+    Eigen::ArrayXd offset_d, offset_q;  // V: the prediction with the base parameters at zero
+    Eigen::ArrayXXd phi_d, phi_q;       // V per unit of each base parameter (rows x 4)
+    Eigen::VectorXd parameters;         // scratch: all parameters with the base ones replaced
+    Eigen::ArrayXd residual_d, residual_q;  // scratch for whoever reduces the block
+
+    Eigen::Index rows() const { return offset_d.size(); }
+};
+
 class SteadyStateModel {
 public:
+    // Rows per block: 512 rows of a model's ~20 per-sample arrays (80 kB) stay in the L2 cache.
+    static constexpr Eigen::Index block_rows = 512;
+
     // Throws InputError when an effect needs a column the data lack.
     SteadyStateModel(Measurement data, std::vector<std::unique_ptr<Effect>> effects);
     SteadyStateModel(const SteadyStateModel&) = delete;
@@ -34,12 +53,42 @@ public:
     // simulation with these effects was made with.
     Eigen::VectorXd parameters_of(const MotorParameters& motor) const;
 
-    // A state sized for the data (allocate once per thread, reuse for every prediction).
-    ModelState make_state() const;
-    // Predicted logged voltages into state.u_d, state.u_q.
-    void predict(const double* parameters, ModelState& state) const;
+    Eigen::Index blocks() const { return (data_.size() + block_rows - 1) / block_rows; }
+    // First row and row count of block b.
+    Eigen::Index block_first(Eigen::Index b) const { return b * block_rows; }
+    Eigen::Index block_size(Eigen::Index b) const { return std::min(block_rows, data_.size() - b * block_rows); }
+
+    // A state sized for `rows` rows of these data (allocate once, reuse for every prediction of
+    // blocks that size); all rows by default.
+    ModelState make_state(Eigen::Index rows = -1) const;
+    AffinePrediction make_affine(Eigen::Index rows) const;
+    // Predicted logged voltages of rows [first, first + state.size()) into state.u_d, state.u_q.
+    void predict(const double* parameters, ModelState& state, Eigen::Index first = 0) const;
+    // The offset and base-parameter columns of rows [first, first + out.rows()) at the effect
+    // parameters in `parameters` (its base entries are ignored): one run of the sensor stages, one
+    // run of the later stages for the offset and one per base parameter in which additive effects
+    // are skipped (plus one to remove the constant part of effects whose dependence is not stated).
+    void predict_affine(const double* parameters, AffinePrediction& out, Eigen::Index first) const;
+
+    // Scratch for one thread's work on one block: sized for full blocks ([0]) and the last one ([1]).
+    struct BlockScratch {
+        ModelState state[2];
+        AffinePrediction affine[2];
+    };
+    // This thread's scratch (made on first use, kept for the model's lifetime) and which of its
+    // two sizes block b uses.
+    BlockScratch& scratch() const { return scratch_.local(); }
+    int scratch_index(Eigen::Index b) const { return block_size(b) == block_rows ? 0 : 1; }
+    // Predicted logged voltages of all rows into u_d and u_q (each data().size() long), a block at a
+    // time, blocks in parallel; the same numbers on any number of threads.
+    void predict_rows(const double* parameters, double* u_d, double* u_q) const;
 
 private:
+    void load(ModelState& s, Eigen::Index first) const;
+    void run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const;
+    // Coefficients onward, from base parameters p[0..3].
+    void from_base(const double* p, ModelState& s, bool base_lane) const;
+
     Measurement data_;
     Eigen::ArrayXd cos_theta_, sin_theta_;  // of the logged angle, once
     std::vector<std::unique_ptr<Effect>> effects_;
@@ -47,6 +96,8 @@ private:
     std::vector<std::string> names_;
     Bounds bounds_;
     unsigned stages_ = 0;
+    bool affine_effects_ = false;
+    mutable tbb::enumerable_thread_specific<BlockScratch> scratch_;  // an effect after the sensors that does not state its base dependence
 };
 
 }  // namespace mhb::pmsm

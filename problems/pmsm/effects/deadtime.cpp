@@ -30,6 +30,7 @@ public:
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
+    BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
             for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {

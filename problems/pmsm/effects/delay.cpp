@@ -14,6 +14,7 @@ public:
     double plant_delay() const override { return values()[0]; }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Delay); }
+    BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
             const Complex u = std::polar(1.0, s.omega[k] * p[0]) * Complex{s.u_d[k], s.u_q[k]};

@@ -12,7 +12,6 @@ const bool effects_listed = list_registry<EffectFactory>("effects");
 
 void ModelState::resize(Eigen::Index n) {
     for (auto* a : {&i_d, &i_q, &omega, &rs, &psi_f, &psi_d, &psi_q, &u_d, &u_q}) a->resize(n);
-    for (auto* a : {&theta, &cos_theta, &sin_theta}) a->resize(data && data->theta_e ? n : 0);
 }
 
 void ModelState::rotate_angle(double delta) {

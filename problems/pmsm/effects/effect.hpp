@@ -52,9 +52,19 @@ constexpr unsigned operator|(ModelStage a, ModelStage b) { return static_cast<un
 constexpr unsigned operator|(unsigned a, ModelStage b) { return a | static_cast<unsigned>(b); }
 constexpr bool acts_in(unsigned stages, ModelStage s) { return (stages & static_cast<unsigned>(s)) != 0; }
 
-// Per-sample quantities of the steady-state model; arrays are preallocated to the sample count.
+// How an effect's model side depends on the base parameters (Rs, Ld, Lq, psi_f) at a stage from
+// Coefficients on, where they have entered the state. A fit splits every prediction into a part
+// without the base parameters and one per base parameter (the prediction is affine in them,
+// model_fit.hpp); an effect that says how it depends lets that split skip work.
+enum class BaseDependence {
+    Affine,    // not stated: any affine map of the state (always correct; costs one more model run)
+    Linear,    // a linear map of what the base parameters made: scales, rotates, adds terms proportional to it
+    Additive,  // adds a term of its own that no base parameter changes (a voltage, a flux)
+};
+
+// Per-sample quantities of the steady-state model over a block of consecutive rows (the model is
+// evaluated a block at a time so that these stay in cache); every array has the block's length.
 struct ModelState {
-    const Measurement* data = nullptr;  // temperatures and the logged angle, when present
     Eigen::ArrayXd i_d, i_q;            // A: measured (controller frame), then true (rotor frame)
     Eigen::ArrayXd theta;               // rad: logged angle, then true angle (empty without theta_e)
     // cos and sin of theta, kept in step with it (rotate_angle), so effects need no sincos per sample.
@@ -63,7 +73,12 @@ struct ModelState {
     Eigen::ArrayXd rs, psi_f;           // Ω, Wb per sample
     Eigen::ArrayXd psi_d, psi_q;        // Wb
     Eigen::ArrayXd u_d, u_q;            // V: machine terminal voltage, then command, then logged
+    // Logged temperatures (°C), empty when the data have none.
+    Eigen::ArrayXd temp_winding, temp_magnet;
 
+    Eigen::Index size() const { return i_d.size(); }
+    // Sizes the arrays every model has; the angle and temperature arrays are sized by whoever loads
+    // the rows (SteadyStateModel), as the data have them.
     void resize(Eigen::Index n);
     // theta += delta, with its cos and sin.
     void rotate_angle(double delta);
@@ -116,6 +131,9 @@ public:
     virtual std::vector<std::string> model_columns() const { return {}; }
     // Applies the effect at `stage` with parameters p (this effect's real parameters, in order).
     virtual void model(ModelStage /*stage*/, const double* /*p*/, ModelState& /*state*/) const {}
+    // How model() at `stage` depends on the base parameters (see BaseDependence); stages before
+    // Coefficients are never asked.
+    virtual BaseDependence model_base_dependence(ModelStage /*stage*/) const { return BaseDependence::Affine; }
 
 private:
     std::string name_;

@@ -59,6 +59,7 @@ public:
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::FluxLinkage); }
+    BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     void model(ModelStage, const double* k, ModelState& s) const override {
         for (Eigen::Index j = 0; j < s.psi_d.size(); ++j) {
             const Complex change = flux_change(k, s.i_d[j], s.i_q[j]);

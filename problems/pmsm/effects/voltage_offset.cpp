@@ -12,6 +12,7 @@ public:
     Complex plant_command_shortfall() const override { return {values()[0], values()[1]}; }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::LoggedVoltage); }
+    BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         s.u_d += p[0];
         s.u_q += p[1];

@@ -1,0 +1,241 @@
+// The steady-state model evaluated a block of rows at a time: its split into an offset and one column
+// per base parameter against predictions made one by one, for every library effect and for an effect
+// that does not state how it depends on the base parameters; blocks in parallel give the same numbers
+// on any number of threads; the per-range normal equations against the Jacobian; the search subsample.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <set>
+
+#include <Eigen/Dense>
+#include <tbb/task_arena.h>
+
+#include "framework/random.hpp"
+#include "problems/pmsm/model_fit.hpp"
+#include "problems/pmsm/steady_state_model.hpp"
+#include "tests/pmsm_diagnosis_fixture.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+using namespace mhb::pmsm::testing;
+
+namespace {
+
+// The voltage offset's parameters with a model side that adds a constant and a term proportional to
+// the resistance, without saying so: the split must take it as a general affine map.
+class UnstatedOffset final : public Effect {
+public:
+    UnstatedOffset() : Effect("voltage_offset", ParameterSet(EffectRegistry::instance().at("voltage_offset", "effect").parameters, {})) {}
+    unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::LoggedVoltage); }
+    void model(ModelStage, const double* p, ModelState& s) const override {
+        s.u_d += p[0] + 0.3 * s.rs * s.i_q;
+        s.u_q += p[1];
+    }
+};
+
+// Effect values drawn inside each declared range.
+Eigen::VectorXd random_values(const SteadyStateModel& model, Rng& rng) {
+    Eigen::VectorXd v = model.parameters_of(MotorParameters{});
+    for (Eigen::Index j = 4; j < v.size(); ++j) v[j] = rng.uniform(model.bounds().lower[j], model.bounds().upper[j]);
+    return v;
+}
+
+// The offset and base columns from whole-data predictions, one per unit base vector (stacked d, q).
+void reference_split(const SteadyStateModel& model, Eigen::VectorXd values, Eigen::VectorXd& offset, Eigen::MatrixXd& phi) {
+    values.head<4>().setZero();
+    offset = predict_stacked(model, values);
+    phi.resize(offset.size(), 4);
+    for (int j = 0; j < 4; ++j) {
+        values.head<4>().setZero();
+        values[j] = 1.0;
+        phi.col(j) = predict_stacked(model, values) - offset;
+    }
+}
+
+void check_split(const SteadyStateModel& model, const Eigen::VectorXd& values) {
+    Eigen::VectorXd offset;
+    Eigen::MatrixXd phi;
+    reference_split(model, values, offset, phi);
+    const Eigen::Index n = model.data().size();
+    const double scale = std::max(offset.cwiseAbs().maxCoeff(), phi.cwiseAbs().maxCoeff());
+    double worst = 0.0;
+    for (Eigen::Index b = 0; b < model.blocks(); ++b) {
+        AffinePrediction a = model.make_affine(model.block_size(b));
+        const Eigen::Index first = model.block_first(b), rows = model.block_size(b);
+        model.predict_affine(values.data(), a, first);
+        worst = std::max(worst, (a.offset_d.matrix() - offset.segment(first, rows)).cwiseAbs().maxCoeff());
+        worst = std::max(worst, (a.offset_q.matrix() - offset.segment(n + first, rows)).cwiseAbs().maxCoeff());
+        worst = std::max(worst, (a.phi_d.matrix() - phi.block(first, 0, rows, 4)).cwiseAbs().maxCoeff());
+        worst = std::max(worst, (a.phi_q.matrix() - phi.block(n + first, 0, rows, 4)).cwiseAbs().maxCoeff());
+    }
+    CHECK(worst <= 1e-12 * scale);
+}
+
+}  // namespace
+
+TEST_CASE("the affine split of each library effect's prediction equals predictions made one by one", "[pmsm][steady_state_model]") {
+    const Measurement& data = diagnosis_data({});
+    REQUIRE(data.size() > SteadyStateModel::block_rows);
+    REQUIRE(data.size() % SteadyStateModel::block_rows != 0);  // a shorter last block is covered
+    Rng rng(11);
+    for (const auto* entry : EffectRegistry::instance().entries()) {
+        INFO("effect " << entry->name);
+        const auto model = make_model(parse_model_spec("base+" + entry->name), data);
+        for (int draw = 0; draw < 3; ++draw) check_split(*model, random_values(*model, rng));
+    }
+    // All at once, the order of the stages included.
+    const auto all = make_model(parse_model_spec("base+current_offset+encoder_offset+rs_thermal+psi_thermal+saturation+flux_harmonic+"
+                                                 "deadtime+delay+voltage_offset"),
+                                data);
+    for (int draw = 0; draw < 3; ++draw) check_split(*all, random_values(*all, rng));
+}
+
+TEST_CASE("an effect that does not state its dependence on the base parameters is split as an affine map", "[pmsm][steady_state_model]") {
+    std::vector<std::unique_ptr<Effect>> effects;
+    effects.push_back(std::make_unique<UnstatedOffset>());
+    effects.push_back(make_effect("deadtime"));
+    const SteadyStateModel model(diagnosis_data({}), std::move(effects));
+    Rng rng(5);
+    for (int draw = 0; draw < 3; ++draw) check_split(model, random_values(model, rng));
+}
+
+TEST_CASE("predictions and fits are the same numbers on one thread and on several", "[pmsm][steady_state_model]") {
+    const Measurement& data = diagnosis_data({{"deadtime", {}}, {"flux_harmonic", {}}});
+    const auto spec = parse_model_spec("base+deadtime+flux_harmonic");
+    const auto model = make_model(spec, data);
+    const Eigen::VectorXd values = model->parameters_of(MotorParameters{});
+    auto on = [&](int threads, auto&& work) {
+        tbb::task_arena arena(threads);
+        return arena.execute(work);
+    };
+    const Eigen::VectorXd one = on(1, [&] { return predict_stacked(*model, values); });
+    const Eigen::VectorXd two = on(2, [&] { return predict_stacked(*model, values); });
+    CHECK(one == two);
+    ModelState whole = model->make_state();
+    model->predict(values.data(), whole);
+    CHECK(one.head(data.size()) == whole.u_d.matrix());
+    CHECK(one.tail(data.size()) == whole.u_q.matrix());
+
+    FitOptions options;
+    options.search_rows = 400;  // the subsample path too
+    const ModelFit fit1 = on(1, [&] { return fit_model(data, spec, options); });
+    const ModelFit fit2 = on(2, [&] { return fit_model(data, spec, options); });
+    CHECK(fit1.values == fit2.values);
+    CHECK(fit1.residual == fit2.residual);
+    CHECK(fit1.standard_error.isApprox(fit2.standard_error, 0.0));
+}
+
+TEST_CASE("the per-range normal equations are the Jacobian's, range by range", "[pmsm][steady_state_model]") {
+    const Measurement& data = diagnosis_data({{"delay", {}}});
+    const auto model = make_model(parse_model_spec("base+delay+voltage_offset"), data);
+    const Eigen::VectorXd values = model->parameters_of(MotorParameters{});
+    const std::vector<Eigen::Index> columns{0, 1, 2, 3, 4, 5, 6};
+    const std::vector<Eigen::Index> starts{0, 100, 777, 778, data.size() - 3};
+    const auto sums = range_normal_equations(*model, values, columns, starts);
+    const Eigen::MatrixXd jacobian = prediction_jacobian(*model, values, columns);
+    const Eigen::Index n = data.size();
+    Eigen::VectorXd y(2 * n);
+    y << data.u_d, data.u_q;
+    const Eigen::VectorXd residual = y - predict_stacked(*model, values);
+    for (std::size_t r = 0; r < starts.size(); ++r) {
+        INFO("range " << r);
+        const Eigen::Index first = starts[r], rows = (r + 1 < starts.size() ? starts[r + 1] : n) - first;
+        Eigen::MatrixXd j(2 * rows, 7);
+        j << jacobian.middleRows(first, rows), jacobian.middleRows(n + first, rows);
+        Eigen::VectorXd e(2 * rows);
+        e << residual.segment(first, rows), residual.segment(n + first, rows);
+        const Eigen::MatrixXd gram = j.transpose() * j;
+        CHECK((sums.gram[r] - gram).cwiseAbs().maxCoeff() <= 1e-9 * gram.cwiseAbs().maxCoeff());
+        CHECK((sums.moment[r] - j.transpose() * e).cwiseAbs().maxCoeff() <= 1e-9 * (j.transpose() * e).cwiseAbs().maxCoeff() + 1e-15);
+        CHECK(sums.total[r] == Approx(e.squaredNorm()).epsilon(1e-12));
+    }
+}
+
+TEST_CASE("held-out segment errors of a model linear in its parameters equal exact refits without the segment", "[pmsm][steady_state_model]") {
+    const Measurement& data = diagnosis_data({{"voltage_offset", {{"u_d", 0.02}, {"u_q", -0.01}}}});
+    const auto spec = parse_model_spec("base+voltage_offset");
+    const auto fit = fit_model(data, spec, FitOptions{});
+    const auto folds = leave_one_segment_out(data, spec, fit.values);
+    const auto model = make_model(spec, data);
+    const std::vector<Eigen::Index> all{0, 1, 2, 3, 4, 5};
+    const Eigen::MatrixXd phi = prediction_jacobian(*model, fit.values, all);  // the model is this regression
+    const Eigen::Index n = data.size();
+    REQUIRE(folds.size() == fit.segments.size());
+    for (std::size_t s = 0; s < fit.segments.size(); ++s) {
+        const auto& seg = fit.segments[s];
+        std::vector<Eigen::Index> train, test;
+        for (int axis = 0; axis < 2; ++axis)
+            for (Eigen::Index k = 0; k < n; ++k) (k >= seg.first && k < seg.first + seg.rows ? test : train).push_back(axis * n + k);
+        Eigen::MatrixXd a(static_cast<Eigen::Index>(train.size()), 6);
+        Eigen::VectorXd y(a.rows());
+        for (std::size_t r = 0; r < train.size(); ++r) {
+            a.row(static_cast<Eigen::Index>(r)) = phi.row(train[r]);
+            y[static_cast<Eigen::Index>(r)] = train[r] < n ? data.u_d[train[r]] : data.u_q[train[r] - n];
+        }
+        const Eigen::VectorXd theta = a.colPivHouseholderQr().solve(y);
+        double sse = 0.0;
+        for (const auto row : test) {
+            const double logged = row < n ? data.u_d[row] : data.u_q[row - n];
+            sse += std::pow(logged - phi.row(row).dot(theta), 2);
+        }
+        INFO("segment " << seg.label);
+        CHECK(folds[s] == Approx(sse).epsilon(1e-7));
+    }
+}
+
+TEST_CASE("the search subsample is every row of short data and a uniform random subset of long data", "[pmsm][model_fit]") {
+    FitOptions options;
+    options.search_rows = 300;
+    const auto all = search_subsample(300, options);
+    REQUIRE(all.size() == 300);
+    CHECK(all.back() == 299);
+    options.seed = 3;
+    const auto some = search_subsample(1000, options);
+    REQUIRE(some.size() == 300);
+    CHECK(std::is_sorted(some.begin(), some.end()));
+    CHECK(std::set<Eigen::Index>(some.begin(), some.end()).size() == 300);
+    CHECK(some.front() >= 0);
+    CHECK(some.back() < 1000);
+    CHECK(search_subsample(1000, options) == some);
+    options.seed = 4;
+    CHECK(search_subsample(1000, options) != some);
+    // Each row is kept with probability 0.3: per tenth of the rows, over 400 seeds, the count is
+    // binomial(400 * 100, 0.3), mean 12 000, standard deviation 92.
+    std::vector<int> per_tenth(10, 0);
+    for (std::uint64_t seed = 1; seed <= 400; ++seed) {
+        options.seed = seed;
+        for (const auto k : search_subsample(1000, options)) ++per_tenth[static_cast<std::size_t>(k / 100)];
+    }
+    for (const int count : per_tenth) CHECK(std::abs(count - 12000) < 5 * 92);
+    options.search_rows = 0;
+    CHECK(search_subsample(5000, options).size() == 5000);
+}
+
+TEST_CASE("a search on a subsample finds the optimum a search on all rows finds", "[pmsm][model_fit]") {
+    struct Case {
+        std::string effect;
+        std::map<std::string, ParameterValue> values;
+        bool exact;  // the steady-state model is exact for the averaged plant with this effect
+    };
+    for (const auto& c : std::vector<Case>{{"delay", {{"tau", 1.7e-4}}, true},
+                                           {"encoder_offset", {{"offset", 0.03}}, true},
+                                           {"deadtime", {{"voltage", 0.3}, {"current_band", 0.02}}, false}}) {
+        INFO("effect " << c.effect);
+        auto spec = read_simulation_profile(profile_path("diagnosis_profile.toml"));
+        spec.noise = SensorNoise{};
+        spec.effects.clear();
+        spec.effects.push_back(make_effect(c.effect, c.values));
+        const auto data = simulate(spec).data;
+        FitOptions options;
+        options.search_rows = 0;
+        const auto everywhere = fit_model(data, parse_model_spec("base+" + c.effect), options);
+        options.search_rows = 200;
+        const auto sampled = fit_model(data, parse_model_spec("base+" + c.effect), options);
+        CHECK(sampled.method.find("on 200 of the") != std::string::npos);
+        CHECK(everywhere.method.find("of the") == std::string::npos);
+        for (Eigen::Index j = 0; j < sampled.values.size(); ++j) CHECK(sampled.values[j] == Approx(everywhere.values[j]).epsilon(1e-6));
+        const auto truth = make_effect(c.effect, c.values);
+        if (c.exact)
+            for (Eigen::Index j = 0; j < truth->values().size(); ++j) CHECK(sampled.values[4 + j] == Approx(truth->values()[j]).epsilon(1e-6));
+    }
+}
