@@ -30,11 +30,10 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
         const auto columns = column_map_option(*o);
+        const auto threads = thread_limit(*o);
         auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
         pmsm::DiagnosisOptions options;
-        options.fit.optimizer = o->optimizer;
-        options.fit.evaluations = o->evaluations;
-        options.fit.seed = o->seed;
+        options.fit = fit_options(*o);
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())

@@ -24,12 +24,9 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
         const auto columns = column_map_option(*o);
+        const auto threads = thread_limit(*o);
         const auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
-        pmsm::FitOptions options;
-        options.optimizer = o->optimizer;
-        options.evaluations = o->evaluations;
-        options.seed = o->seed;
-        const auto fit = pmsm::fit_model(data, spec, options);
+        const auto fit = pmsm::fit_model(data, spec, fit_options(*o));
         fmt::print("{}", pmsm::fit_text(fit, data));
         if (!o->json.empty()) {
             auto out = pmsm::fit_json(fit);

@@ -2,14 +2,18 @@
 // Options shared by the commands that fit a PMSM model to measurements (`fit`, `diagnose`).
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
 
 #include "framework/cli/option_ranges.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/column_map.hpp"
+#include "problems/pmsm/measurement.hpp"
+#include "problems/pmsm/model_fit.hpp"
 
 namespace mhb::cli {
 
@@ -23,6 +27,8 @@ struct ModelCommandOptions {
     double settle = 0.0;
     std::int64_t evaluations = 0;
     std::uint64_t seed = 1;
+    std::int64_t search_rows = pmsm::FitOptions{}.search_rows;
+    int threads = 0;
 };
 
 inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::string& model_help,
@@ -41,7 +47,28 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
         ->check(whole_number_in<std::uint64_t>(0, std::numeric_limits<std::uint64_t>::max()));
     cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)")
         ->check(number_in(0.0, 1e6));
+    cmd->add_option("--search-rows", o.search_rows,
+                    "rows the optimiser searches on, a random subset of longer data (0: all); all rows are polished")
+        ->check(whole_number_in<std::int64_t>(0, pmsm::max_measurement_rows));
+    cmd->add_option("--threads", o.threads, "worker threads (default: all cores); results do not depend on it")
+        ->check(whole_number_in<int>(1, 4096));
     cmd->add_option("--json", o.json, json_help);
+}
+
+// The fit settings of the options.
+inline pmsm::FitOptions fit_options(const ModelCommandOptions& o) {
+    pmsm::FitOptions options;
+    options.optimizer = o.optimizer;
+    options.evaluations = o.evaluations;
+    options.seed = o.seed;
+    options.search_rows = o.search_rows;
+    return options;
+}
+
+// Caps TBB's workers at --threads while it lives (no cap without the option).
+inline std::optional<tbb::global_control> thread_limit(const ModelCommandOptions& o) {
+    if (o.threads <= 0) return std::nullopt;
+    return std::make_optional<tbb::global_control>(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(o.threads));
 }
 
 // The column map of --columns, --columns-file and --pole-pairs, checked before any data is read.

@@ -31,8 +31,10 @@ double wrap_into(double x, double lo, double hi) {
 // Where to evaluate a central difference: 1e-4 of the declared range either side, one-sided at a
 // bound. The step is that coarse because some effects are smooth only on the scale of the noise (a
 // dead-time band of a few milliamperes, where each sample enters or leaves it).
+constexpr double difference_step = 1e-4;  // of the parameter's declared range
+
 std::pair<double, double> difference_points(double x, double lo, double hi, bool periodic) {
-    const double h = 1e-4 * (hi - lo);
+    const double h = difference_step * (hi - lo);
     if (periodic) return {x - h, x + h};
     return {std::max(x - h, lo), std::min(x + h, hi)};
 }
@@ -40,9 +42,11 @@ std::pair<double, double> difference_points(double x, double lo, double hi, bool
 // Variable projection of a model on its data: for given effect parameters, the base parameters that
 // minimise the squared residual (the prediction is affine in them) and that residual. The data are
 // reduced a block at a time, blocks in parallel, to the normal equations of the base parameters, so
-// that an evaluation keeps no row-sized array. The sums are taken about reference base values (the
-// last solution) so that the residual sum of squares, recovered from them as a quadratic, does not
-// lose its digits to cancellation.
+// that an evaluation keeps no row-sized array. The sums are taken about reference base values near
+// the solution so that the residual sum of squares, recovered from them as a quadratic, keeps its
+// digits. The reference stays fixed until its owner moves it: two effect values with the same
+// prediction then get the same sum to the last bit, which an optimiser's test for a flat objective
+// (a harmonic's phase at zero amplitude) relies on.
 class Projection {
 public:
     struct BlockSums {
@@ -52,7 +56,7 @@ public:
     };
     struct Workspace {
         Eigen::VectorXd values;     // all parameters; the base entries are the solution after project()
-        Eigen::Vector4d reference;  // base values the sums are taken about
+        Eigen::Vector4d reference;  // base values the sums are taken about (set by workspace() and its owner)
         std::vector<BlockSums> blocks;
         Eigen::VectorXd residual;   // logged minus predicted (stacked d, q), when project() is asked for it
     };
@@ -124,7 +128,6 @@ public:
         const Eigen::Vector4d step =
             (eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose() * rhs).cwiseQuotient(scale);
         w.values.head<4>() = reference + step;
-        w.reference = w.values.head<4>();
         const double rss = std::max(all.total - 2.0 * step.dot(all.moment) + step.dot(all.gram * step), 0.0);
         if (!residual) return rss;
         w.residual.resize(2 * n_);
@@ -238,6 +241,7 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
     int iteration = 0;
     for (; iteration < 100; ++iteration) {
         values = w.values;
+        w.reference = values.head<4>();
         const auto sums = range_normal_equations(model, values, columns, all_rows);
         const Eigen::MatrixXd& jj = sums.gram[0];
         const Eigen::VectorXd& jr = sums.moment[0];
@@ -281,9 +285,19 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
                 if (new_rss < rss) {
                     improved = true;
                     lambda = std::max(lambda / 3.0, 1e-12);
-                } else {
-                    lambda *= 4.0;
+                    continue;
                 }
+                lambda *= 4.0;
+                // A failed step that stays inside the difference stencil cannot be told from the
+                // Jacobian's own error: the optimum is found to the resolution the Jacobian has (on a
+                // dead-time band the sum of squares is rough at that scale, and a dozen ever shorter
+                // trials would each cost a pass over the rows for nothing).
+                bool inside = true;
+                for (Eigen::Index r = 0; r < f && inside; ++r) {
+                    const Eigen::Index p = moving[static_cast<std::size_t>(step_on[static_cast<std::size_t>(r)])];
+                    inside = std::abs(delta[r]) <= difference_step * (hi[p] - lo[p]);
+                }
+                if (inside) break;
             }
         }
         if (!improved) {
@@ -302,7 +316,7 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
 }
 
 ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& values,
-                  CovarianceMethod covariance) {
+                  CovarianceMethod covariance, bool intervals) {
     ModelFit fit;
     fit.spec = spec;
     fit.names = model.parameter_names();
@@ -324,6 +338,10 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
     std::vector<Eigen::Index> columns;
     for (Eigen::Index j = 0; j < p; ++j)
         if (fit.free[static_cast<std::size_t>(j)]) columns.push_back(j);
+    fit.lower = fit.upper = values;
+    fit.standard_error = Eigen::VectorXd::Zero(p);
+    for (const auto j : columns) fit.lower[j] = fit.upper[j] = fit.standard_error[j] = nan;
+    if (!intervals) return fit;
     const Eigen::MatrixXd jacobian = prediction_jacobian(model, values, columns);
     // A parameter that moves the prediction by less than a nanovolt over its whole range (the phase
     // of a harmonic whose amplitude is zero) is not determined at all; it is left out of the
@@ -335,9 +353,6 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
         if (j < 4 || jacobian.col(static_cast<Eigen::Index>(c)).norm() * width > 1e-9 * std::sqrt(2.0 * static_cast<double>(n)))
             kept.push_back(static_cast<Eigen::Index>(c));
     }
-    fit.lower = fit.upper = values;
-    fit.standard_error = Eigen::VectorXd::Zero(p);
-    for (const auto j : columns) fit.lower[j] = fit.upper[j] = fit.standard_error[j] = nan;
     if (static_cast<Eigen::Index>(kept.size()) < 2 * n && !kept.empty()) {
         Eigen::MatrixXd phi(2 * n, static_cast<Eigen::Index>(kept.size()));
         Eigen::VectorXd estimate(phi.cols());
@@ -370,10 +385,10 @@ std::vector<Eigen::Index> free_effect_parameters(const std::vector<bool>& free) 
 }
 
 ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Projection& projection,
-                Projection::Workspace& w, const std::vector<bool>& free, CovarianceMethod covariance,
+                Projection::Workspace& w, const std::vector<Eigen::Index>& moving, CovarianceMethod covariance, bool intervals,
                 std::int64_t evaluations, std::string method) {
     const auto info = parameter_info(model);
-    const int iterations = polish(projection, model, w, free_effect_parameters(free), info.periodic);
+    const int iterations = polish(projection, model, w, moving, info.periodic);
     // The base parameters once more by column-pivoting QR, for the reported values.
     projection.project(w);
     Eigen::MatrixXd phi;
@@ -383,7 +398,7 @@ ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Proj
     target << model.data().u_d, model.data().u_q;
     const LeastSquares exact = solve_least_squares(phi, target - offset);
     w.values.head<4>() = exact.solution;
-    ModelFit fit = assemble(model, spec, w.values, covariance);
+    ModelFit fit = assemble(model, spec, w.values, covariance, intervals);
     fit.evaluations = evaluations;
     fit.polish_iterations = iterations;
     fit.method = std::move(method);
@@ -585,7 +600,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
     const Projection projection(*model);
     auto w = projection.workspace(initial);
     if (searched.empty())
-        return finish(*model, spec, projection, w, free, options.covariance, 0,
+        return finish(*model, spec, projection, w, free_effect_parameters(free), options.covariance, options.intervals, 0,
                       spec.effects.empty() || free_effect_parameters(free).empty() ? "linear least squares (exact)"
                                                                                    : "local refinement from the given start");
 
@@ -597,6 +612,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
         sample_projection.emplace(*sample_model);
     }
     const EffectSearch problem(sample_projection ? *sample_projection : projection, *model, initial, searched);
+    const auto moving = free_effect_parameters(free);
     auto optimizer = make_optimizer(options.optimizer);
     const auto k = static_cast<std::int64_t>(searched.size());
     const std::int64_t budget = options.evaluations > 0 ? options.evaluations : 150 + 50 * k;
@@ -614,13 +630,24 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
         auto best = projection.workspace(initial);
         for (std::size_t j = 0; j < searched.size(); ++j) best.values[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
         if (sample_projection) {
+            // Then on subsets ten times larger each, up to all rows: each starts nearer the optimum
+            // of all rows, so the polish on all rows needs few of its expensive iterations.
+            const auto periodic = parameter_info(*model).periodic;
             auto sample = sample_projection->workspace(best.values);
-            polish(*sample_projection, *sample_model, sample, free_effect_parameters(free), parameter_info(*model).periodic);
+            polish(*sample_projection, *sample_model, sample, moving, periodic);
             best.values = sample.values;
+            FitOptions level = options;
+            for (level.search_rows = 10 * options.search_rows; level.search_rows < data.size(); level.search_rows *= 10) {
+                const auto subset = make_model(spec, select_rows(data, search_subsample(data.size(), level)));
+                const Projection subset_projection(*subset);
+                auto on_subset = subset_projection.workspace(best.values);
+                polish(subset_projection, *subset, on_subset, moving, periodic);
+                best.values = on_subset.values;
+            }
         }
         if (projection.project(best) < start_rss) w.values = best.values;
     }
-    return finish(*model, spec, projection, w, free, options.covariance, record.evaluations, method);
+    return finish(*model, spec, projection, w, moving, options.covariance, options.intervals, record.evaluations, method);
 }
 
 Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& start) {
@@ -631,11 +658,13 @@ Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec
     return w.values;
 }
 
-ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start, CovarianceMethod covariance) {
+ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start, CovarianceMethod covariance,
+                      bool intervals) {
     const auto model = make_model(spec, data);
     const Projection projection(*model);
     auto w = projection.workspace(start);
-    return finish(*model, spec, projection, w, free_parameters(spec), covariance, 0, "local refinement from the given start");
+    return finish(*model, spec, projection, w, free_effect_parameters(free_parameters(spec)), covariance, intervals, 0,
+                  "local refinement from the given start");
 }
 
 }  // namespace mhb::pmsm

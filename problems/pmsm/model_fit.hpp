@@ -28,6 +28,9 @@ struct FitOptions {
     // rather than every k-th row, so that the subsample cannot alias with the electrical angle.
     // 0: always all rows.
     std::int64_t search_rows = 3000;
+    // Whether to compute the intervals (a Jacobian of the whole model and its covariance); off for
+    // the many fits a search compares by their residual alone.
+    bool intervals = true;
 };
 
 struct AxisRms {
@@ -80,7 +83,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
 
 // Levenberg-Marquardt from `start` only (no global search), e.g. to refit on part of the data.
 ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start,
-                      CovarianceMethod covariance = CovarianceMethod::NeweyWest);
+                      CovarianceMethod covariance = CovarianceMethod::NeweyWest, bool intervals = true);
 // The same, returning only the parameter values (no residual summaries, no intervals).
 Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& start);
 
