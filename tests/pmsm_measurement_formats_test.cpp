@@ -246,6 +246,35 @@ TEST_CASE("numeric segments and other layouts: integers, char matrices, fixed-le
     }
 }
 
+TEST_CASE("HDF5 string labels longer than a read slab, as a vector or a one-column matrix, read back row by row", "[pmsm][measurement][formats]") {
+    // The reader takes variable-length strings 65536 rows at a time; 150001 rows end in a short slab.
+    const std::size_t n = 150'001;
+    std::vector<std::string> labels(n);
+    for (std::size_t r = 0; r < n; ++r) labels[r] = "op" + std::to_string(r * 7 / n) + (r % 2 ? "" : "_even");
+    std::vector<double> numbers(n);
+    for (std::size_t r = 0; r < n; ++r) numbers[r] = static_cast<double>(r) * 0.5;
+    mhb::testing::TemporaryDirectory dir;
+    for (const std::vector<hsize_t>& shape : {std::vector<hsize_t>{n}, std::vector<hsize_t>{n, 1}, std::vector<hsize_t>{1, n}}) {
+        INFO(shape.size() << "-dimensional, first extent " << shape[0]);
+        const auto path = dir.path() / "labels.h5";
+        {
+            H5::H5File file(path.string(), H5F_ACC_TRUNC);
+            const H5::StrType text(H5::PredType::C_S1, H5T_VARIABLE);
+            std::vector<const char*> pointers;
+            for (const auto& l : labels) pointers.push_back(l.c_str());
+            file.createDataSet("segment", text, H5::DataSpace(static_cast<int>(shape.size()), shape.data())).write(pointers.data(), text);
+            const hsize_t dims[1] = {n};
+            for (const char* name : {"i_d", "i_q", "u_d", "u_q", "omega_e"})
+                file.createDataSet(name, H5::PredType::IEEE_F64LE, H5::DataSpace(1, dims)).write(numbers.data(), H5::PredType::NATIVE_DOUBLE);
+        }
+        const auto m = read_measurement(path);
+        REQUIRE(m.size() == static_cast<Eigen::Index>(n));
+        CHECK(m.segment_labels.size() == 14);
+        CHECK(labels_of(m) == labels);
+        CHECK(m.u_q[static_cast<Eigen::Index>(n - 1)] == numbers.back());
+    }
+}
+
 TEST_CASE("the column map reads a user's names and units from CSV, MAT and HDF5 alike", "[pmsm][measurement][formats]") {
     mhb::testing::TemporaryDirectory dir;
     // Logged as a bench would: mA, mV, mechanical rpm, degrees, kelvin, milliseconds.

@@ -1,7 +1,10 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+
+#include <fmt/format.h>
 
 #include "framework/input_error.hpp"
 #include "problems/pmsm/measurement.hpp"
@@ -231,4 +234,149 @@ TEST_CASE("a measurement with more rows than the stated limit is refused before 
     const auto e = refusal(text);
     CHECK_THAT(e.message(), Catch::Contains(std::to_string(max_measurement_rows + 1) + " rows") &&
                                 Catch::Contains("limit is " + std::to_string(max_measurement_rows)));
+}
+
+namespace {
+
+// A measurement with every column, its values of many lengths when written (shortest round-trip
+// form), so that line ends fall everywhere in a block.
+Measurement every_column(Eigen::Index n) {
+    Measurement m;
+    m.i_d = Eigen::VectorXd::LinSpaced(n, -0.1, 0.0);
+    m.i_q = Eigen::VectorXd::Random(n) * 0.2;
+    m.u_d = Eigen::VectorXd::Random(n) / 3.0;
+    m.u_q = Eigen::VectorXd::Random(n) * 7.0;
+    m.omega_e = Eigen::VectorXd::Constant(n, 16.76);
+    m.t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.0004 * static_cast<double>(n - 1));
+    m.theta_e = Eigen::VectorXd::Random(n) * 3.1;
+    m.temp_winding = Eigen::VectorXd::Constant(n, 20.0) + Eigen::VectorXd::Random(n);
+    m.temp_magnet = Eigen::VectorXd::Constant(n, 1.0 / 3.0);
+    m.segment_labels = {"id0", "id-0.1", "iq0.25"};
+    m.segment.resize(n);
+    for (Eigen::Index r = 0; r < n; ++r) m.segment[r] = static_cast<int>(3 * r / n);
+    return m;
+}
+
+// Compared through the writer's text: it gives every double in its shortest round-trip form, so
+// equal texts mean equal doubles, and a difference shows as the row where it is.
+void check_same(const Measurement& back, const Measurement& m) {
+    const std::string read = format_measurement(back), written = format_measurement(m);
+    const auto at = static_cast<std::size_t>(std::mismatch(read.begin(), read.end(), written.begin(), written.end()).first - read.begin());
+    INFO("from byte " << at << ": read '" << read.substr(at, 80) << "', written '" << written.substr(at, 80) << "'");
+    CHECK((at == read.size() && read.size() == written.size()));
+}
+
+InputError csv_file_refusal(const std::filesystem::path& path, std::size_t block_bytes) {
+    try {
+        read_csv_measurement(path, {}, block_bytes);
+    } catch (const InputError& e) {
+        return e;
+    }
+    FAIL("the reader accepted " << path << " read in blocks of " << block_bytes << " bytes");
+    throw std::logic_error("unreachable");
+}
+
+}  // namespace
+
+TEST_CASE("a CSV file read in blocks smaller than a line reads back bit for bit", "[pmsm][measurement]") {
+    const Measurement m = every_column(3000);
+    const testing::TemporaryDirectory dir;
+    const auto path = dir.path() / "blocks.csv";
+    write_measurement(path, m);
+    REQUIRE(std::filesystem::file_size(path) > 100'000);
+    for (const std::size_t block : {std::size_t{1}, std::size_t{3}, std::size_t{7}, std::size_t{64}, std::size_t{191},
+                                    std::size_t{4096}, std::size_t{65'537}, csv_block_bytes}) {
+        INFO("blocks of " << block << " bytes");
+        const auto back = read_csv_measurement(path, {}, block);
+        CHECK(back.warnings.empty());
+        check_same(back, m);
+    }
+    check_same(read_measurement(path), m);
+}
+
+TEST_CASE("CRLF line ends, a byte-order mark and blank lines read the same wherever a block ends", "[pmsm][measurement]") {
+    const std::string text =
+        "\xEF\xBB\xBFt,segment,i_d,i_q,u_d,u_q,omega_e\r\n"
+        "0,a,0.5,0.1,-0.03,5.3,16.76\r\n"
+        "\r\n"
+        "0.0004,a,+0.51,1e-1,-3e-2,5.3,16.76\r\n"
+        "   \r\n"
+        "0.0008,b,-0.1,0.1,-4.6,5.2,16.75\r\n"
+        "0.0012,b,-0.2,0.3,-4.7,5.1,16.74";  // the last line without a line end
+    const testing::TemporaryDirectory dir;
+    const auto path = dir.write("crlf.csv", text);
+    const auto whole = parse_measurement(text, "crlf.csv");
+    REQUIRE(whole.size() == 4);
+    CHECK(whole.i_d[1] == 0.51);
+    CHECK((*whole.t)[3] == 0.0012);
+    REQUIRE(whole.warnings.size() == 1);
+    CHECK(whole.warnings[0] == "crlf.csv: 2 blank line(s) skipped");
+    // Every block size up to the whole file puts a boundary between every '\r' and its '\n' somewhere.
+    for (std::size_t block = 1; block <= text.size() + 1; ++block) {
+        INFO("blocks of " << block << " bytes");
+        const auto m = read_csv_measurement(path, {}, block);
+        check_same(m, whole);
+        REQUIRE(m.warnings.size() == 1);
+        CHECK(m.warnings[0] == path.string() + ": 2 blank line(s) skipped");
+    }
+}
+
+TEST_CASE("an error after the first block names the line it is on", "[pmsm][measurement]") {
+    std::string text = "i_d,i_q,u_d,u_q,omega_e\r\n";
+    for (int line = 2; line <= 2000; ++line) text += fmt::format("{},0.1,-0.03,5.3,16.76\r\n", line * 1e-4);
+    const std::string bad_value = text + "0.3,0.1,three,5.3,16.76\r\n" + "0.3,0.1,-0.03,5.3,16.76\r\n";
+    const std::string ragged = text + "\r\n0.3,0.1,-0.03,5.3\r\n";
+    std::string nul = text + "0.3,0.1,-0.03,5.3,16.76\r\n";
+    nul[nul.size() - 10] = '\0';
+    const testing::TemporaryDirectory dir;
+    for (const std::size_t block : {std::size_t{3}, std::size_t{64}, std::size_t{1000}, csv_block_bytes}) {
+        INFO("blocks of " << block << " bytes");
+        const auto value = csv_file_refusal(dir.write("value.csv", bad_value), block);
+        CHECK(value.line() == 2001);
+        CHECK(value.field() == "u_d");
+        CHECK(value.message() == "not a number: 'three'");
+        const auto row = csv_file_refusal(dir.write("ragged.csv", ragged), block);
+        CHECK(row.line() == 2002);
+        CHECK(row.message() == "row has 4 fields but the header has 5");
+        const auto binary = csv_file_refusal(dir.write("nul.csv", nul), block);
+        CHECK(binary.line() == 2001);
+        CHECK(binary.message() == "binary data (a NUL byte), not a CSV text file");
+    }
+    // The text in memory is refused with the same words.
+    CHECK(std::string(refusal(bad_value).what()) == "bad.csv:2001: u_d: not a number: 'three'");
+}
+
+TEST_CASE("a file read in blocks is refused as its text is", "[pmsm][measurement]") {
+    const testing::TemporaryDirectory dir;
+    for (const std::string& text : {std::string(" \n\n"), std::string("i_d,i_q,u_d,u_q,omega_e\n"), std::string("i_d,i_q,u_d,u_q,omega_e\n\n \n"),
+                                   std::string("i_d,i_q,u_d,omega_e\n1,2,3,4\n"), std::string("i_d,i_q,u_d,u_q,omega_e,i_q\n1,2,3,4,5,6\n"),
+                                   std::string("i_d;i_q;u_d;u_q;omega_e\n0,1;0,2;0,3;0,4;16,7\n"),
+                                   std::string("segment,i_d,i_q,u_d,u_q,omega_e\na,1,2,3,4,5\n ,1,2,3,4,5\n"),
+                                   std::string("i_d,i_q,u_d,u_q,omega_e\n0,1,0,2,0,3,0,4,16,7\n"), std::string("i_d,i_q,u_d,u_q,omega_e\n1,2,3,4,1e999\n")}) {
+        const auto path = dir.write("bad.csv", text);
+        const auto expected = refusal(text);
+        for (const std::size_t block : {std::size_t{1}, std::size_t{4}, std::size_t{9}, csv_block_bytes}) {
+            INFO(text << "in blocks of " << block << " bytes");
+            const auto e = csv_file_refusal(path, block);
+            CHECK(e.line() == expected.line());
+            CHECK(e.field() == expected.field());
+            CHECK(e.message() == expected.message());
+        }
+    }
+}
+
+TEST_CASE("selecting the rows of a measurement no longer needed gives what a copy gives", "[pmsm][measurement]") {
+    const Measurement m = every_column(40);
+    for (const std::vector<Eigen::Index>& rows : {std::vector<Eigen::Index>{0, 1, 2, 39}, std::vector<Eigen::Index>{15, 16, 30, 31, 32},
+                                                  std::vector<Eigen::Index>{}, std::vector<Eigen::Index>{3, 2, 1},
+                                                  std::vector<Eigen::Index>{5, 5, 6}, settled_rows(m, 0.0)}) {
+        INFO(rows.size() << " rows");
+        const Measurement copied = select_rows(m, rows);
+        Measurement spent = m;
+        check_same(select_rows(std::move(spent), rows), copied);
+    }
+    // The rows after the middle segment's start: its label comes first, the first segment's is gone.
+    const auto tail = select_rows(every_column(40), std::vector<Eigen::Index>{20, 30, 39});
+    CHECK(tail.segment_labels == std::vector<std::string>{"id-0.1", "iq0.25"});
+    CHECK(tail.segment == Eigen::Vector3i(0, 1, 1));
 }

@@ -364,12 +364,12 @@ std::string image(const std::string& file, const std::string& alt) { return file
 }  // namespace
 
 Measurement read_settled_measurement(const fs::path& path, double settle, const ColumnMap& map) {
-    const Measurement all = read_measurement(path, map);
+    Measurement all = read_measurement(path, map);
     const auto rows = settled_rows(all, settle);
     if (rows.size() < 10)
         throw InputError(path.string(), 0, "settle",
                          fmt::format("dropping {} s after each segment start leaves {} samples; at least 10 are needed", settle, rows.size()));
-    return select_rows(all, rows);
+    return select_rows(std::move(all), rows);
 }
 
 json fit_json(const ModelFit& fit) {

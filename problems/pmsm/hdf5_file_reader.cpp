@@ -1,4 +1,5 @@
 // HDF5 files through the HDF5 C++ API.
+#include <algorithm>
 #include <mutex>
 
 #include <H5Cpp.h>
@@ -32,17 +33,32 @@ const char* class_name(H5T_class_t c) {
     }
 }
 
-// The strings of a string dataset; fixed-length ones lose the NULs or blanks they are padded with.
-std::vector<std::string> read_strings(const H5::DataSet& dataset, const H5::DataSpace& space, std::size_t n) {
+// The strings of a string dataset of shape `dims` (a vector of n); fixed-length ones lose the NULs
+// or blanks they are padded with.
+TextColumn read_strings(const H5::DataSet& dataset, const H5::DataSpace& space, const std::vector<hsize_t>& dims, std::size_t n) {
     const H5::StrType stored = dataset.getStrType();
-    std::vector<std::string> out;
-    out.reserve(n);
+    TextColumn out;
+    out.rows.resize(static_cast<Eigen::Index>(n));
     if (stored.isVariableStr()) {
+        // A slab at a time: the library allocates every variable-length string on its own, and a
+        // million of them at once would cost more than all the numeric columns, and leave the heap
+        // too fragmented to give that memory back.
+        constexpr hsize_t slab = 1 << 16;
+        const std::size_t axis = dims.size() == 2 && dims[0] == 1 ? 1 : 0;
         const H5::StrType memory(H5::PredType::C_S1, H5T_VARIABLE);
-        std::vector<char*> text(n, nullptr);
-        dataset.read(text.data(), memory, space, space);
-        for (char* s : text) out.emplace_back(s ? s : "");
-        H5Dvlen_reclaim(memory.getId(), space.getId(), H5P_DEFAULT, text.data());
+        std::vector<char*> text(static_cast<std::size_t>(std::min<hsize_t>(slab, n)), nullptr);
+        for (hsize_t start = 0; start < n; start += slab) {
+            std::vector<hsize_t> offset(dims.size(), 0), count = dims;
+            offset[axis] = start;
+            count[axis] = std::min<hsize_t>(slab, n - start);
+            H5::DataSpace in_file = dataset.getSpace();
+            in_file.selectHyperslab(H5S_SELECT_SET, count.data(), offset.data());
+            const H5::DataSpace in_memory(1, &count[axis]);
+            dataset.read(text.data(), memory, in_memory, in_file);
+            for (hsize_t k = 0; k < count[axis]; ++k)
+                out.rows[static_cast<Eigen::Index>(start + k)] = out.index_of(text[k] ? text[k] : "");
+            H5Dvlen_reclaim(memory.getId(), in_memory.getId(), H5P_DEFAULT, text.data());
+        }
         return out;
     }
     const std::size_t width = stored.getSize();
@@ -50,9 +66,9 @@ std::vector<std::string> read_strings(const H5::DataSet& dataset, const H5::Data
     std::vector<char> bytes(n * width);
     dataset.read(bytes.data(), memory, space, space);
     for (std::size_t k = 0; k < n; ++k) {
-        std::string s(bytes.data() + k * width, width);
-        while (!s.empty() && (s.back() == '\0' || s.back() == ' ')) s.pop_back();
-        out.push_back(std::move(s));
+        std::string_view s(bytes.data() + k * width, width);
+        while (!s.empty() && (s.back() == '\0' || s.back() == ' ')) s.remove_suffix(1);
+        out.rows[static_cast<Eigen::Index>(k)] = out.index_of(s);
     }
     return out;
 }
@@ -77,10 +93,10 @@ FileColumn column_from_dataset(const H5::Group& group, const std::string& name) 
     const H5T_class_t type = dataset.getTypeClass();
     if (type == H5T_INTEGER || type == H5T_FLOAT) {
         // HDF5 converts every integer and float type to double on reading, exactly up to 2^53.
-        column.numbers.resize(n);
+        column.numbers.resize(static_cast<Eigen::Index>(n));
         if (n > 0) dataset.read(column.numbers.data(), H5::PredType::NATIVE_DOUBLE, space, space);
     } else if (type == H5T_STRING) {
-        column.labels = read_strings(dataset, space, n);
+        column.labels = read_strings(dataset, space, dims, n);
     } else {
         column.unusable = fmt::format("a dataset of {} type; mhbench reads numbers and strings", class_name(type));
     }

@@ -28,13 +28,13 @@ struct MeasurementStatistics {
 
 MeasurementStatistics read_statistics(const std::filesystem::path& path, double settle, Fitness fitness, CovarianceMethod method) {
     MeasurementStatistics s;
-    const Measurement all = read_measurement(path);
+    Measurement all = read_measurement(path);
     const auto rows = settled_rows(all, settle);
     if (rows.size() < 3)
         throw InputError(path.string(), 0, "settle",
                          fmt::format("dropping {} s after each segment start leaves {} samples; at least 3 are needed", settle, rows.size()));
-    s.data = select_rows(all, rows);
     s.total_samples = all.size();
+    s.data = select_rows(std::move(all), rows);
     s.fit = fit_base_model(s.data, fitness, method);
     s.truth = read_sidecar_truth(path);
     return s;

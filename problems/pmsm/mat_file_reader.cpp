@@ -76,9 +76,10 @@ bool is_vector(const matvar_t* v) { return v->rank == 2 && (v->dims[0] == 1 || v
 bool is_numeric(matio_classes c) { return c >= MAT_C_DOUBLE && c <= MAT_C_UINT64; }
 
 template <class T>
-void append_numbers(const matvar_t* v, std::size_t n, std::vector<double>& out) {
+void copy_numbers(const matvar_t* v, std::size_t n, Eigen::VectorXd& out) {
     const auto* data = static_cast<const T*>(v->data);
-    for (std::size_t k = 0; k < n; ++k) out.push_back(static_cast<double>(data[k]));
+    out.resize(static_cast<Eigen::Index>(n));
+    for (std::size_t k = 0; k < n; ++k) out[static_cast<Eigen::Index>(k)] = static_cast<double>(data[k]);
 }
 
 void append_utf8(std::uint32_t code, std::string& out) {
@@ -128,6 +129,13 @@ std::vector<std::string> char_rows(const matvar_t* v) {
     return out;
 }
 
+TextColumn text_column(const std::vector<std::string>& rows) {
+    TextColumn out;
+    out.rows.resize(static_cast<Eigen::Index>(rows.size()));
+    for (std::size_t r = 0; r < rows.size(); ++r) out.rows[static_cast<Eigen::Index>(r)] = out.index_of(rows[r]);
+    return out;
+}
+
 FileColumn column_from_variable(const matvar_t* v, std::string name) {
     FileColumn column;
     column.name = std::move(name);
@@ -142,24 +150,23 @@ FileColumn column_from_variable(const matvar_t* v, std::string name) {
         else if (n > static_cast<std::size_t>(max_measurement_rows))
             column.unusable = fmt::format("{} rows; the limit is {} rows", n, max_measurement_rows);
         if (!column.unusable.empty()) return column;
-        column.numbers.reserve(n);
         switch (v->class_type) {
-            case MAT_C_DOUBLE: append_numbers<double>(v, n, column.numbers); break;
-            case MAT_C_SINGLE: append_numbers<float>(v, n, column.numbers); break;
-            case MAT_C_INT8: append_numbers<std::int8_t>(v, n, column.numbers); break;
-            case MAT_C_UINT8: append_numbers<std::uint8_t>(v, n, column.numbers); break;
-            case MAT_C_INT16: append_numbers<std::int16_t>(v, n, column.numbers); break;
-            case MAT_C_UINT16: append_numbers<std::uint16_t>(v, n, column.numbers); break;
-            case MAT_C_INT32: append_numbers<std::int32_t>(v, n, column.numbers); break;
-            case MAT_C_UINT32: append_numbers<std::uint32_t>(v, n, column.numbers); break;
-            case MAT_C_INT64: append_numbers<std::int64_t>(v, n, column.numbers); break;
-            default: append_numbers<std::uint64_t>(v, n, column.numbers); break;
+            case MAT_C_DOUBLE: copy_numbers<double>(v, n, column.numbers); break;
+            case MAT_C_SINGLE: copy_numbers<float>(v, n, column.numbers); break;
+            case MAT_C_INT8: copy_numbers<std::int8_t>(v, n, column.numbers); break;
+            case MAT_C_UINT8: copy_numbers<std::uint8_t>(v, n, column.numbers); break;
+            case MAT_C_INT16: copy_numbers<std::int16_t>(v, n, column.numbers); break;
+            case MAT_C_UINT16: copy_numbers<std::uint16_t>(v, n, column.numbers); break;
+            case MAT_C_INT32: copy_numbers<std::int32_t>(v, n, column.numbers); break;
+            case MAT_C_UINT32: copy_numbers<std::uint32_t>(v, n, column.numbers); break;
+            case MAT_C_INT64: copy_numbers<std::int64_t>(v, n, column.numbers); break;
+            default: copy_numbers<std::uint64_t>(v, n, column.numbers); break;
         }
         return column;
     }
     if (v->class_type == MAT_C_CHAR) {
         if (v->rank != 2 || v->data_size > 2) column.unusable = fmt::format("a {} char array in an unsupported encoding or shape", shape(v));
-        else column.labels = char_rows(v);
+        else column.labels = text_column(char_rows(v));
         return column;
     }
     if (v->class_type == MAT_C_CELL) {
@@ -167,8 +174,8 @@ FileColumn column_from_variable(const matvar_t* v, std::string name) {
             column.unusable = fmt::format("a {} cell array, not a vector", shape(v));
             return column;
         }
-        std::vector<std::string> labels;
-        labels.reserve(n);
+        TextColumn labels;
+        labels.rows.resize(static_cast<Eigen::Index>(n));
         for (std::size_t k = 0; k < n; ++k) {
             const matvar_t* cell = Mat_VarGetCell(const_cast<matvar_t*>(v), static_cast<int>(k));
             if (!cell || (cell->class_type != MAT_C_CHAR && elements(cell) > 0)) {
@@ -181,7 +188,7 @@ FileColumn column_from_variable(const matvar_t* v, std::string name) {
                 column.unusable = fmt::format("row {}: the cell holds a {} char matrix, not one line of text", k + 1, shape(cell));
                 return column;
             }
-            labels.push_back(rows[0]);
+            labels.rows[static_cast<Eigen::Index>(k)] = labels.index_of(rows[0]);
         }
         column.labels = std::move(labels);
         return column;

@@ -2,6 +2,7 @@
 // A drive measurement: one row per logged sample, one column per signal, SI units, temperatures in °C.
 // The same format holds simulated and real data (docs/data-format.md). Columns are stored as Eigen
 // vectors so model evaluations run vectorised over samples.
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -35,9 +36,15 @@ struct Measurement {
     void resize(Eigen::Index n);
 };
 
-// The most rows a measurement may have (and a simulation profile may ask for): the reader holds the
-// file and its columns in memory at once, about 300 bytes a row, so this stays near 1.5 GB.
+// The most rows a measurement may have (and a simulation profile may ask for): read, it takes 76
+// bytes a row with every column, and `mhbench fit --model base` about 640 bytes a row in all
+// (measured at 10^6 rows, docs/performance.md), so this stays near 3.2 GB.
 inline constexpr std::int64_t max_measurement_rows = 5'000'000;
+
+// The CSV reader reads a file in blocks of this size, twice (once to count the rows, once to parse
+// them into columns allocated at their final size): large enough that a read is cheap next to
+// parsing it, small next to the columns of a large file.
+inline constexpr std::size_t csv_block_bytes = std::size_t{4} << 20;
 
 // Names of the columns, in the order the writer emits them.
 inline constexpr const char* required_columns[] = {"i_d", "i_q", "u_d", "u_q", "omega_e"};
@@ -59,14 +66,22 @@ MeasurementFormat measurement_format(const std::filesystem::path& path);
 Measurement read_measurement(const std::filesystem::path& path, const ColumnMap& map = {});
 // Parses CSV text; `source` names it in error messages.
 Measurement parse_measurement(const std::string& text, const std::string& source, const ColumnMap& map = {});
+// read_measurement for a file taken as CSV whatever its content, read `block_bytes` at a time (at
+// least 3); a file that starts as some other binary format is refused as such. Tests choose small
+// blocks to put block boundaries inside lines.
+Measurement read_csv_measurement(const std::filesystem::path& path, const ColumnMap& map = {},
+                                 std::size_t block_bytes = csv_block_bytes);
 
 // Writes the present columns with a header; numbers in shortest round-trip form, so reading the file
 // back gives the same doubles.
 void write_measurement(const std::filesystem::path& path, const Measurement& m);
 std::string format_measurement(const Measurement& m);
 
-// The rows listed in `rows` (in that order), with segment labels renumbered.
+// The rows listed in `rows` (in that order), with segment labels renumbered. Given a measurement
+// that is no longer needed, and rows that ascend strictly (as settled_rows lists them), the rows are
+// selected in place, so that a large measurement is not held twice.
 Measurement select_rows(const Measurement& m, const std::vector<Eigen::Index>& rows);
+Measurement select_rows(Measurement&& m, const std::vector<Eigen::Index>& rows);
 
 // Rows to keep when dropping the first `settle` seconds after every segment start (the first row and
 // each row whose segment differs from the previous row's). Needs the t and segment columns.

@@ -2,16 +2,39 @@
 // The variables of a binary measurement file (MAT, HDF5) as the format readers hand them to the
 // measurement reader, which maps them onto mhbench's columns (problems/pmsm/measurement.cpp).
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include <Eigen/Core>
 
 namespace mhb::pmsm {
 
+// A column of text with each distinct text held once: a segment column repeats a few labels over a
+// million rows, where a string a row would cost more than all the numeric columns together.
+struct TextColumn {
+    std::vector<std::string> texts;  // the distinct texts, in order of first appearance
+    Eigen::VectorXi rows;            // each row's text, as an index into texts
+    std::map<std::string, int, std::less<>> index;
+
+    // The index of `text` in texts, where it is added when new.
+    int index_of(std::string_view text) {
+        auto it = index.find(text);
+        if (it == index.end()) {
+            it = index.emplace(std::string(text), static_cast<int>(texts.size())).first;
+            texts.emplace_back(text);
+        }
+        return it->second;
+    }
+};
+
 struct FileColumn {
     std::string name;
-    std::vector<double> numbers;
-    std::optional<std::vector<std::string>> labels;  // text (a cell array of strings, a string dataset)
+    Eigen::VectorXd numbers;  // Eigen's, so that the measurement takes it over without a copy
+    std::optional<TextColumn> labels;  // text (a cell array of strings, a char matrix, a string dataset)
     // Why the variable cannot be a column (e.g. "a 3x4 matrix"); empty when it can. Refused only when
     // the variable is used, so that a file may carry other data beside the log.
     std::string unusable;
