@@ -25,8 +25,8 @@ Eigen::VectorXd column_scale(const Eigen::MatrixXd& phi) {
 // parameter combination is not determined by the data at all).
 Eigen::MatrixXd gram_inverse(const Eigen::MatrixXd& phi) {
     const Eigen::VectorXd s = column_scale(phi);
-    const Eigen::MatrixXd scaled = phi * s.cwiseInverse().asDiagonal();
-    const Eigen::MatrixXd g = scaled.transpose() * scaled;
+    // Scaled after the product, so that no copy as long as the data is made.
+    const Eigen::MatrixXd g = s.cwiseInverse().asDiagonal() * (phi.transpose() * phi) * s.cwiseInverse().asDiagonal();
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
     const double largest = eig.eigenvalues().maxCoeff();
     if (!(eig.eigenvalues().minCoeff() > 1e-14 * largest))
@@ -160,11 +160,19 @@ BoxLeastSquares box_least_squares(const LeastSquares& ls, const Bounds& box) {
 ParameterUncertainty parameter_uncertainty(const Eigen::MatrixXd& phi, const Eigen::VectorXd& y,
                                            const Eigen::VectorXd& estimate, const RowLayout& layout,
                                            CovarianceMethod method) {
+    if (y.size() != phi.rows() || estimate.size() != phi.cols())
+        throw std::invalid_argument("parameter uncertainty: the row layout does not match the regression");
+    return residual_uncertainty(phi, y - phi * estimate, estimate, layout, method);
+}
+
+ParameterUncertainty residual_uncertainty(const Eigen::MatrixXd& phi, const Eigen::VectorXd& residual,
+                                          const Eigen::VectorXd& estimate, const RowLayout& layout,
+                                          CovarianceMethod method) {
     const Eigen::Index n = layout.samples, p = phi.cols(), rows = phi.rows();
-    if (n * layout.axes != rows || y.size() != rows || estimate.size() != p || (layout.block.size() != 0 && layout.block.size() != n))
+    if (n * layout.axes != rows || residual.size() != rows || estimate.size() != p ||
+        (layout.block.size() != 0 && layout.block.size() != n))
         throw std::invalid_argument("parameter uncertainty: the row layout does not match the regression");
     if (rows <= p) throw std::invalid_argument("parameter uncertainty: needs more rows than parameters");
-    const Eigen::VectorXd residual = y - phi * estimate;
     const double dof_correction = static_cast<double>(rows) / static_cast<double>(rows - p);
     const Eigen::MatrixXd bread = gram_inverse(phi);
 

@@ -77,6 +77,11 @@ ParameterUncertainty parameter_uncertainty(const Eigen::MatrixXd& phi, const Eig
                                            const Eigen::VectorXd& estimate, const RowLayout& layout,
                                            CovarianceMethod method);
 
+// The same from the residual y - phi estimate, for a caller that has it (no second copy of y).
+ParameterUncertainty residual_uncertainty(const Eigen::MatrixXd& phi, const Eigen::VectorXd& residual,
+                                          const Eigen::VectorXd& estimate, const RowLayout& layout,
+                                          CovarianceMethod method);
+
 const char* to_string(CovarianceMethod method);
 
 }  // namespace mhb::pmsm

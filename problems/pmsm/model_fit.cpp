@@ -7,7 +7,7 @@
 #include <numeric>
 #include <optional>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Dense>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <fmt/format.h>
@@ -137,22 +137,30 @@ public:
         return w.residual.squaredNorm();
     }
 
-    // The offset and base-parameter columns of all rows at w.values' effect parameters (stacked d, q).
-    void columns(const Workspace& w, Eigen::MatrixXd& phi, Eigen::VectorXd& offset) const {
-        phi.resize(2 * n_, 4);
-        offset.resize(2 * n_);
-        tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model_.blocks()), [&](const tbb::blocked_range<Eigen::Index>& range) {
-            auto& scratch = model_.scratch();
-            for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
-                AffinePrediction& a = scratch.affine[model_.scratch_index(b)];
-                const Eigen::Index first = model_.block_first(b), rows = a.rows();
-                model_.predict_affine(w.values.data(), a, first);
-                offset.segment(first, rows) = a.offset_d.matrix();
-                offset.segment(n_ + first, rows) = a.offset_q.matrix();
-                phi.block(first, 0, rows, 4) = a.phi_d.matrix();
-                phi.block(n_ + first, 0, rows, 4) = a.phi_q.matrix();
-            }
-        });
+    // The base parameters at w.values' effect parameters by QR of the regressor, for the reported
+    // values: the rows are folded in a block at a time into the triangular factor of [phi | logged -
+    // offset] (Householder QR of that factor stacked on the block), so no regressor as long as the
+    // data is built; the 4 x 4 problem left has the same minimisers and is solved by
+    // solve_least_squares (column scaling, pivoting, minimum norm).
+    Eigen::Vector4d exact_base(const Workspace& w) const {
+        const auto& data = model_.data();
+        Eigen::Matrix<double, 5, 5> r = Eigen::Matrix<double, 5, 5>::Zero();
+        Eigen::MatrixXd stacked;
+        auto& scratch = model_.scratch();
+        for (Eigen::Index b = 0; b < model_.blocks(); ++b) {
+            AffinePrediction& a = scratch.affine[model_.scratch_index(b)];
+            const Eigen::Index first = model_.block_first(b), rows = a.rows();
+            model_.predict_affine(w.values.data(), a, first);
+            stacked.resize(5 + 2 * rows, 5);
+            stacked.topRows<5>() = r;
+            stacked.block(5, 0, rows, 4) = a.phi_d.matrix();
+            stacked.block(5 + rows, 0, rows, 4) = a.phi_q.matrix();
+            stacked.col(4).segment(5, rows) = data.u_d.segment(first, rows) - a.offset_d.matrix();
+            stacked.col(4).segment(5 + rows, rows) = data.u_q.segment(first, rows) - a.offset_q.matrix();
+            const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
+            r = qr.matrixQR().topRows<5>().triangularView<Eigen::Upper>();
+        }
+        return solve_least_squares(r.topLeftCorner<4, 4>(), r.col(4).head<4>()).solution;
     }
 
 private:
@@ -329,9 +337,9 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
     fit.range_upper = model.bounds().upper;
     const Eigen::Index n = model.data().size(), p = model.parameter_count();
     fit.samples = n;
-    Eigen::VectorXd y(2 * n);
-    y << model.data().u_d, model.data().u_q;
-    fit.residual = y - predict_stacked(model, values);
+    fit.residual = predict_stacked(model, values);
+    fit.residual.head(n) = model.data().u_d - fit.residual.head(n);
+    fit.residual.tail(n) = model.data().u_q - fit.residual.tail(n);
     fit.rms = axis_rms(fit.residual, n);
     fit.segments = segment_residuals(model.data(), fit.residual);
 
@@ -342,7 +350,7 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
     fit.standard_error = Eigen::VectorXd::Zero(p);
     for (const auto j : columns) fit.lower[j] = fit.upper[j] = fit.standard_error[j] = nan;
     if (!intervals) return fit;
-    const Eigen::MatrixXd jacobian = prediction_jacobian(model, values, columns);
+    Eigen::MatrixXd jacobian = prediction_jacobian(model, values, columns);
     // A parameter that moves the prediction by less than a nanovolt over its whole range (the phase
     // of a harmonic whose amplitude is zero) is not determined at all; it is left out of the
     // covariance, which would otherwise be singular for every parameter.
@@ -354,18 +362,21 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
             kept.push_back(static_cast<Eigen::Index>(c));
     }
     if (static_cast<Eigen::Index>(kept.size()) < 2 * n && !kept.empty()) {
-        Eigen::MatrixXd phi(2 * n, static_cast<Eigen::Index>(kept.size()));
-        Eigen::VectorXd estimate(phi.cols());
-        for (Eigen::Index c = 0; c < phi.cols(); ++c) {
-            phi.col(c) = jacobian.col(kept[static_cast<std::size_t>(c)]);
-            estimate[c] = values[columns[static_cast<std::size_t>(kept[static_cast<std::size_t>(c)])]];
+        // The kept columns, moved into place (no second matrix as long as the data).
+        Eigen::MatrixXd phi = std::move(jacobian);
+        Eigen::VectorXd estimate(static_cast<Eigen::Index>(kept.size()));
+        for (Eigen::Index c = 0; c < estimate.size(); ++c) {
+            const Eigen::Index from = kept[static_cast<std::size_t>(c)];
+            if (from != c) phi.col(c) = phi.col(from);
+            estimate[c] = values[columns[static_cast<std::size_t>(from)]];
         }
+        phi.conservativeResize(Eigen::NoChange, estimate.size());
         RowLayout layout;
         layout.samples = n;
         layout.axes = 2;
         if (model.data().has_segments()) layout.block = model.data().segment;
         // The linearised model around the estimate: its residual is the model's own.
-        fit.uncertainty = parameter_uncertainty(phi, phi * estimate + fit.residual, estimate, layout, covariance);
+        fit.uncertainty = residual_uncertainty(phi, fit.residual, estimate, layout, covariance);
         for (Eigen::Index c = 0; c < phi.cols(); ++c) {
             const Eigen::Index j = columns[static_cast<std::size_t>(kept[static_cast<std::size_t>(c)])];
             if (!std::isfinite(fit.uncertainty.standard_error[c])) continue;
@@ -391,13 +402,7 @@ ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Proj
     const int iterations = polish(projection, model, w, moving, info.periodic);
     // The base parameters once more by column-pivoting QR, for the reported values.
     projection.project(w);
-    Eigen::MatrixXd phi;
-    Eigen::VectorXd offset;
-    projection.columns(w, phi, offset);
-    Eigen::VectorXd target(2 * model.data().size());
-    target << model.data().u_d, model.data().u_q;
-    const LeastSquares exact = solve_least_squares(phi, target - offset);
-    w.values.head<4>() = exact.solution;
+    w.values.head<4>() = projection.exact_base(w);
     ModelFit fit = assemble(model, spec, w.values, covariance, intervals);
     fit.evaluations = evaluations;
     fit.polish_iterations = iterations;
@@ -435,26 +440,41 @@ Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::
                                     const std::vector<Eigen::Index>& columns) {
     const Eigen::Index n = model.data().size();
     Eigen::MatrixXd jacobian(2 * n, static_cast<Eigen::Index>(columns.size()));
-    Eigen::VectorXd at = values;
-    at.head<4>().setZero();
-    const Eigen::VectorXd offset = predict_stacked(model, at);
     const auto& lo = model.bounds().lower;
     const auto& hi = model.bounds().upper;
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-        const Eigen::Index j = columns[c];
-        if (j < 4) {
-            at = values;
-            at.head<4>().setZero();
-            at[j] = 1.0;
-            jacobian.col(static_cast<Eigen::Index>(c)) = predict_stacked(model, at) - offset;
-            continue;
+    // A block at a time, blocks in parallel: the base columns from the block's affine split, the
+    // effect columns from two predictions of the block each.
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model.blocks()), [&](const tbb::blocked_range<Eigen::Index>& blocks) {
+        auto& scratch = model.scratch();
+        Eigen::VectorXd at = values;
+        for (Eigen::Index b = blocks.begin(); b != blocks.end(); ++b) {
+            const int size = model.scratch_index(b);
+            AffinePrediction& a = scratch.affine[size];
+            ModelState& s = scratch.state[size];
+            const Eigen::Index first = model.block_first(b), rows = a.rows();
+            model.predict_affine(values.data(), a, first);
+            for (std::size_t c = 0; c < columns.size(); ++c) {
+                const Eigen::Index j = columns[c];
+                auto d = jacobian.col(static_cast<Eigen::Index>(c)).segment(first, rows);
+                auto q = jacobian.col(static_cast<Eigen::Index>(c)).segment(n + first, rows);
+                if (j < 4) {
+                    d = a.phi_d.col(j).matrix();
+                    q = a.phi_q.col(j).matrix();
+                    continue;
+                }
+                const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
+                at[j] = up;
+                model.predict(at.data(), s, first);
+                d = s.u_d.matrix();
+                q = s.u_q.matrix();
+                at[j] = down;
+                model.predict(at.data(), s, first);
+                d = (d - s.u_d.matrix()) / (up - down);
+                q = (q - s.u_q.matrix()) / (up - down);
+                at[j] = values[j];
+            }
         }
-        const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
-        Eigen::VectorXd plus = values, minus = values;
-        plus[j] = up;
-        minus[j] = down;
-        jacobian.col(static_cast<Eigen::Index>(c)) = (predict_stacked(model, plus) - predict_stacked(model, minus)) / (up - down);
-    }
+    });
     return jacobian;
 }
 

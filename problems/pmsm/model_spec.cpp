@@ -159,7 +159,11 @@ std::vector<std::unique_ptr<Effect>> make_effects(const ModelSpec& spec) {
     return effects;
 }
 
-std::unique_ptr<SteadyStateModel> make_model(const ModelSpec& spec, Measurement data) {
+std::unique_ptr<SteadyStateModel> make_model(const ModelSpec& spec, const Measurement& data) {
+    return std::make_unique<SteadyStateModel>(data, make_effects(spec));
+}
+
+std::unique_ptr<SteadyStateModel> make_model(const ModelSpec& spec, Measurement&& data) {
     return std::make_unique<SteadyStateModel>(std::move(data), make_effects(spec));
 }
 

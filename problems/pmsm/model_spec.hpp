@@ -41,7 +41,9 @@ std::vector<std::unique_ptr<Effect>> make_effects(const ModelSpec& spec);
 
 // The steady-state model of `spec` on `data`; InputError naming the column when an effect needs one
 // the data lack.
-std::unique_ptr<SteadyStateModel> make_model(const ModelSpec& spec, Measurement data);
+// The model refers to `data`, which must outlive it; from a temporary, it keeps the data.
+std::unique_ptr<SteadyStateModel> make_model(const ModelSpec& spec, const Measurement& data);
+std::unique_ptr<SteadyStateModel> make_model(const ModelSpec& spec, Measurement&& data);
 
 // Which parameters of make_model(spec, ...) are fitted: the four base parameters and every effect
 // parameter not fixed by the spec (same order as SteadyStateModel::parameter_names()).

@@ -12,8 +12,16 @@ Bounds base_parameter_bounds() {
     return b;
 }
 
-SteadyStateModel::SteadyStateModel(Measurement data, std::vector<std::unique_ptr<Effect>> effects)
-    : data_(std::move(data)),
+SteadyStateModel::SteadyStateModel(const Measurement& data, std::vector<std::unique_ptr<Effect>> effects)
+    : SteadyStateModel(std::nullopt, &data, std::move(effects)) {}
+
+SteadyStateModel::SteadyStateModel(Measurement&& data, std::vector<std::unique_ptr<Effect>> effects)
+    : SteadyStateModel(std::optional<Measurement>(std::move(data)), nullptr, std::move(effects)) {}
+
+SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measurement* view,
+                                   std::vector<std::unique_ptr<Effect>> effects)
+    : owned_(std::move(owned)),
+      data_(owned_ ? *owned_ : *view),
       effects_(std::move(effects)),
       names_(base_parameter_names),
       scratch_([this] {

@@ -5,6 +5,7 @@
 // parameters followed by each effect's real parameters in declaration order.
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,10 @@ public:
     static constexpr Eigen::Index block_rows = 512;
 
     // Throws InputError when an effect needs a column the data lack.
-    SteadyStateModel(Measurement data, std::vector<std::unique_ptr<Effect>> effects);
+    // The model refers to `data`, which must outlive it (a long log is not copied).
+    SteadyStateModel(const Measurement& data, std::vector<std::unique_ptr<Effect>> effects);
+    // The model keeps `data`.
+    SteadyStateModel(Measurement&& data, std::vector<std::unique_ptr<Effect>> effects);
     SteadyStateModel(const SteadyStateModel&) = delete;
     SteadyStateModel& operator=(const SteadyStateModel&) = delete;
 
@@ -84,12 +88,14 @@ public:
     void predict_rows(const double* parameters, double* u_d, double* u_q) const;
 
 private:
+    SteadyStateModel(std::optional<Measurement> owned, const Measurement* view, std::vector<std::unique_ptr<Effect>> effects);
     void load(ModelState& s, Eigen::Index first) const;
     void run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const;
     // Coefficients onward, from base parameters p[0..3].
     void from_base(const double* p, ModelState& s, bool base_lane) const;
 
-    Measurement data_;
+    std::optional<Measurement> owned_;
+    const Measurement& data_;
     Eigen::ArrayXd cos_theta_, sin_theta_;  // of the logged angle, once
     std::vector<std::unique_ptr<Effect>> effects_;
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
