@@ -510,19 +510,59 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
     std::vector<std::string> parts;
     if (data.theta_e) {
         // Harmonics of the electrical angle, fitted jointly with the segment means.
-        const int orders = 12;
+        constexpr int orders = 12;
         const auto s = static_cast<Eigen::Index>(ranges.size());
-        Eigen::MatrixXd x = Eigen::MatrixXd::Zero(n, s + 2 * orders);
-        for (Eigen::Index k = 0; k < s; ++k) x.col(k).segment(ranges[static_cast<std::size_t>(k)].first, ranges[static_cast<std::size_t>(k)].rows).setOnes();
-        for (int h = 1; h <= orders; ++h) {
-            x.col(s + 2 * (h - 1)) = (static_cast<double>(h) * data.theta_e->array()).cos().matrix();
-            x.col(s + 2 * (h - 1) + 1) = (static_cast<double>(h) * data.theta_e->array()).sin().matrix();
+        // The regressors (one indicator per segment, cos and sin of each order) are never stored:
+        // each block of rows adds its share of X'X and X'r, the harmonics by turning e^{j theta}.
+        using Harmonics = Eigen::Matrix<double, 2 * orders, 1>;
+        struct Share {
+            Eigen::Matrix<double, 2 * orders, 2 * orders> harmonic_gram;
+            Eigen::MatrixXd segment_harmonic;  // s x 2 orders
+            Eigen::Matrix<double, 2 * orders, 2> harmonic_residual;
+        };
+        constexpr Eigen::Index block_rows = 4096;
+        const Eigen::Index blocks = (n + block_rows - 1) / block_rows;
+        std::vector<Share> shares(static_cast<std::size_t>(blocks));
+        std::vector<Eigen::Index> segment_of_row(static_cast<std::size_t>(n));
+        for (Eigen::Index k = 0; k < s; ++k)
+            std::fill_n(segment_of_row.begin() + ranges[static_cast<std::size_t>(k)].first, ranges[static_cast<std::size_t>(k)].rows, k);
+        tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index b) {
+            Share& share = shares[static_cast<std::size_t>(b)];
+            share.harmonic_gram.setZero();
+            share.segment_harmonic = Eigen::MatrixXd::Zero(s, 2 * orders);
+            share.harmonic_residual.setZero();
+            Harmonics x;
+            for (Eigen::Index t = b * block_rows; t < std::min(n, (b + 1) * block_rows); ++t) {
+                const Complex rotor = std::polar(1.0, (*data.theta_e)[t]);
+                Complex turn = rotor;
+                for (int h = 0; h < orders; ++h) {
+                    x[2 * h] = turn.real();
+                    x[2 * h + 1] = turn.imag();
+                    turn *= rotor;
+                }
+                share.harmonic_gram.selfadjointView<Eigen::Lower>().rankUpdate(x);
+                share.segment_harmonic.row(segment_of_row[static_cast<std::size_t>(t)]) += x.transpose();
+                share.harmonic_residual.col(0) += fit.residual[t] * x;
+                share.harmonic_residual.col(1) += fit.residual[n + t] * x;
+            }
+        });
+        const Eigen::Index columns = s + 2 * orders;
+        Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(columns, columns);
+        Eigen::MatrixXd moment = Eigen::MatrixXd::Zero(columns, 2);
+        for (Eigen::Index k = 0; k < s; ++k) {
+            const auto& r = ranges[static_cast<std::size_t>(k)];
+            gram(k, k) = static_cast<double>(r.rows);
+            for (int a = 0; a < 2; ++a) moment(k, a) = fit.residual.segment(a * n + r.first, r.rows).sum();
         }
-        const Eigen::MatrixXd gram = x.transpose() * x;
+        for (const auto& share : shares) {
+            gram.bottomRightCorner(2 * orders, 2 * orders) += share.harmonic_gram.selfadjointView<Eigen::Lower>().toDenseMatrix();
+            gram.topRightCorner(s, 2 * orders) += share.segment_harmonic;
+            moment.bottomRows(2 * orders) += share.harmonic_residual;
+        }
+        gram.bottomLeftCorner(2 * orders, s) = gram.topRightCorner(s, 2 * orders).transpose();
         const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(gram);
         const Eigen::MatrixXd inverse = cod.pseudoInverse();
-        Eigen::MatrixXd coefficients(x.cols(), 2);
-        for (int a = 0; a < 2; ++a) coefficients.col(a) = inverse * (x.transpose() * fit.residual.segment(a * n, n));
+        const Eigen::MatrixXd coefficients = inverse * moment;
         const double tests = 2.0 * orders;
         for (int h = 1; h <= orders; ++h) {
             const Eigen::Index c = s + 2 * (h - 1);

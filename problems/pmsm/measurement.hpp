@@ -37,8 +37,8 @@ struct Measurement {
 };
 
 // The most rows a measurement may have (and a simulation profile may ask for): read, it takes 76
-// bytes a row with every column, `mhbench fit` about 270 and `mhbench diagnose` about 950 bytes a row
-// in all (measured at 10^6 rows, docs/performance.md), so a diagnosis stays below 5 GB.
+// bytes a row with every column, `mhbench fit` about 270 and `mhbench diagnose` about 800 bytes a row
+// in all (measured at 10^6 rows, docs/performance.md), so a diagnosis stays near 4 GB.
 inline constexpr std::int64_t max_measurement_rows = 5'000'000;
 
 // The CSV reader reads a file in blocks of this size, twice (once to count the rows, once to parse
