@@ -1,5 +1,6 @@
 #include "problems/pmsm/diagnosis_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -300,15 +301,23 @@ std::string path_plot(Plotter& plot, const Diagnosis& d) {
     }
     out.close();
     const double floor = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
+    // The implausible marker (and its key entry) only when some step has implausible values.
+    const bool any_implausible = std::any_of(d.path.begin(), d.path.end(), [](const PathStep& step) { return !step.plausible; });
     std::string body = fmt::format("set title {} noenhanced\nset grid\nset ylabel 'rms residual (V)'\nset logscale y\n",
-                                   gnuplot_quote("Residual after each step of the search, down to the noise floor (open circles: implausible values)"));
+                                   gnuplot_quote(any_implausible ? "Residual after each step of the search, down to the noise floor (open circles: implausible values)"
+                                                                 : "Residual after each step of the search, down to the noise floor"));
     body += fmt::format("set xrange [-0.4:{}]\nset xtics rotate by -25 noenhanced\nset key top right\nset bmargin 6\n", static_cast<double>(d.path.size()) - 0.6);
+    const std::string implausible_series =
+        any_implausible ? fmt::format("{} using 1:($6 > 0 ? NaN : $3) with points pt 6 ps 2.5 lw 2 lc rgb '#c0392b' title 'implausible values', ",
+                                      gnuplot_quote(file.string()))
+                        : std::string();
     body += fmt::format("plot {0} using 1:3:xtic(2) with linespoints lw 2 pt 7 ps 1.5 lc rgb '{1}' title 'u_d and u_q combined', "
-                        "{0} using 1:($6 > 0 ? NaN : $3) with points pt 6 ps 2.5 lw 2 lc rgb '#c0392b' title 'implausible values', "
+                        "{4}"
                         "{0} using 1:4 with linespoints dt 3 pt 4 lc rgb '#777777' title 'u_d', "
                         "{0} using 1:5 with linespoints dt 3 pt 8 lc rgb '#aaaaaa' title 'u_q', "
                         "{2:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {3}\n",
-                        gnuplot_quote(file.string()), model_colour, floor, gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))));
+                        gnuplot_quote(file.string()), model_colour, floor, gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))),
+                        implausible_series);
     return plot.render("path", body, 1000, 520);
 }
 
