@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -82,7 +83,9 @@ public:
         d_.setOnes(n);
         bd_.setIdentity(n, n);
         scratch_.resize(n, n);
-        solver_ = Eigen::SelfAdjointEigenSolver<Matrix>(n);
+        // Made in place: Eigen leaves an uncomputed solver's status unset, so copying or moving one
+        // reads an indeterminate enum (UBSan reports it).
+        solver_.emplace(n);
         diagonal_.resize(n);
         sub_diagonal_.resize(n - 1);
         householder_coefficients_.resize(n - 1);
@@ -213,12 +216,12 @@ private:
         sub_diagonal_ = scratch_.diagonal<-1>();
         Eigen::HouseholderSequence<Matrix, Vector> reflectors(scratch_, householder_coefficients_);
         reflectors.setLength(n - 1).setShift(1).evalTo(scratch_, householder_workspace_);
-        solver_.computeFromTridiagonal(diagonal_, sub_diagonal_, Eigen::ComputeEigenvectors);
-        if (solver_.info() != Eigen::Success)
+        solver_->computeFromTridiagonal(diagonal_, sub_diagonal_, Eigen::ComputeEigenvectors);
+        if (solver_->info() != Eigen::Success)
             throw PluginFault("CMA-ES: the eigendecomposition of the covariance matrix did not converge");
-        for (Eigen::Index k = 0; k < n; ++k) b_.col(k).noalias() = scratch_ * solver_.eigenvectors().col(k);
-        const double largest = scale * solver_.eigenvalues().maxCoeff();
-        d_ = (scale * solver_.eigenvalues()).cwiseMax(kEigenvalueFloor * largest).cwiseSqrt();
+        for (Eigen::Index k = 0; k < n; ++k) b_.col(k).noalias() = scratch_ * solver_->eigenvectors().col(k);
+        const double largest = scale * solver_->eigenvalues().maxCoeff();
+        d_ = (scale * solver_->eigenvalues()).cwiseMax(kEigenvalueFloor * largest).cwiseSqrt();
         bd_ = b_ * d_.asDiagonal();
         samples_since_eigen_ = 0;
     }
@@ -233,7 +236,7 @@ private:
     Vector p_sigma_, p_c_;
     Matrix c_, b_, bd_, scratch_;
     Vector d_;
-    Eigen::SelfAdjointEigenSolver<Matrix> solver_;
+    std::optional<Eigen::SelfAdjointEigenSolver<Matrix>> solver_;
     Vector diagonal_, sub_diagonal_, householder_coefficients_, householder_workspace_;
     Matrix z_, y_, candidates_;
     Vector fitness_;
