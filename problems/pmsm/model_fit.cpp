@@ -58,7 +58,6 @@ public:
         Eigen::VectorXd values;     // all parameters; the base entries are the solution after project()
         Eigen::Vector4d reference;  // base values the sums are taken about (set by workspace() and its owner)
         std::vector<BlockSums> blocks;
-        Eigen::VectorXd residual;   // logged minus predicted (stacked d, q), when project() is asked for it
     };
 
     explicit Projection(const SteadyStateModel& model) : model_(model), n_(model.data().size()) {}
@@ -74,10 +73,9 @@ public:
     }
 
     // Solves the base entries of w.values for its effect entries and returns the residual sum of
-    // squares; with `residual`, also fills w.residual. Allocation-free after the first call: the
-    // optimiser calls it for every candidate. The same result on any number of threads (fixed blocks,
-    // summed in order).
-    double project(Workspace& w, bool residual = false) const {
+    // squares. Allocation-free after the first call: the optimiser calls it for every candidate. The
+    // same result on any number of threads (fixed blocks, summed in order).
+    double project(Workspace& w) const {
         const auto& data = model_.data();
         const Eigen::Vector4d reference = w.reference;
         tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model_.blocks()), [&](const tbb::blocked_range<Eigen::Index>& range) {
@@ -128,13 +126,7 @@ public:
         const Eigen::Vector4d step =
             (eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose() * rhs).cwiseQuotient(scale);
         w.values.head<4>() = reference + step;
-        const double rss = std::max(all.total - 2.0 * step.dot(all.moment) + step.dot(all.gram * step), 0.0);
-        if (!residual) return rss;
-        w.residual.resize(2 * n_);
-        model_.predict_rows(w.values.data(), w.residual.data(), w.residual.data() + n_);
-        w.residual.head(n_) = data.u_d - w.residual.head(n_);
-        w.residual.tail(n_) = data.u_q - w.residual.tail(n_);
-        return w.residual.squaredNorm();
+        return std::max(all.total - 2.0 * step.dot(all.moment) + step.dot(all.gram * step), 0.0);
     }
 
     // The base parameters at w.values' effect parameters by QR of the regressor, for the reported
@@ -436,43 +428,52 @@ Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::Vect
     return out;
 }
 
-Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values,
-                                    const std::vector<Eigen::Index>& columns) {
-    const Eigen::Index n = model.data().size();
-    Eigen::MatrixXd jacobian(2 * n, static_cast<Eigen::Index>(columns.size()));
+namespace {
+
+// The prediction Jacobian of the rows of block b in the listed columns, d rows into `d` and q rows
+// into `q`: base columns from the block's affine split (exact), effect columns by central
+// differences. Uses this thread's scratch of the model; `at` holds `values` and is restored.
+void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values, const std::vector<Eigen::Index>& columns,
+                    Eigen::Index b, Eigen::VectorXd& at, Eigen::Ref<Eigen::MatrixXd> d, Eigen::Ref<Eigen::MatrixXd> q) {
+    auto& scratch = model.scratch();
+    const int size = model.scratch_index(b);
+    AffinePrediction& a = scratch.affine[size];
+    ModelState& s = scratch.state[size];
+    const Eigen::Index first = model.block_first(b);
     const auto& lo = model.bounds().lower;
     const auto& hi = model.bounds().upper;
-    // A block at a time, blocks in parallel: the base columns from the block's affine split, the
-    // effect columns from two predictions of the block each.
+    model.predict_affine(values.data(), a, first);
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        const Eigen::Index j = columns[c], k = static_cast<Eigen::Index>(c);
+        if (j < 4) {
+            d.col(k) = a.phi_d.col(j).matrix();
+            q.col(k) = a.phi_q.col(j).matrix();
+            continue;
+        }
+        const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
+        at[j] = up;
+        model.predict(at.data(), s, first);
+        d.col(k) = s.u_d.matrix();
+        q.col(k) = s.u_q.matrix();
+        at[j] = down;
+        model.predict(at.data(), s, first);
+        d.col(k) = (d.col(k) - s.u_d.matrix()) / (up - down);
+        q.col(k) = (q.col(k) - s.u_q.matrix()) / (up - down);
+        at[j] = values[j];
+    }
+}
+
+}  // namespace
+
+Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values,
+                                    const std::vector<Eigen::Index>& columns) {
+    const Eigen::Index n = model.data().size(), p = static_cast<Eigen::Index>(columns.size());
+    Eigen::MatrixXd jacobian(2 * n, p);
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model.blocks()), [&](const tbb::blocked_range<Eigen::Index>& blocks) {
-        auto& scratch = model.scratch();
         Eigen::VectorXd at = values;
         for (Eigen::Index b = blocks.begin(); b != blocks.end(); ++b) {
-            const int size = model.scratch_index(b);
-            AffinePrediction& a = scratch.affine[size];
-            ModelState& s = scratch.state[size];
-            const Eigen::Index first = model.block_first(b), rows = a.rows();
-            model.predict_affine(values.data(), a, first);
-            for (std::size_t c = 0; c < columns.size(); ++c) {
-                const Eigen::Index j = columns[c];
-                auto d = jacobian.col(static_cast<Eigen::Index>(c)).segment(first, rows);
-                auto q = jacobian.col(static_cast<Eigen::Index>(c)).segment(n + first, rows);
-                if (j < 4) {
-                    d = a.phi_d.col(j).matrix();
-                    q = a.phi_q.col(j).matrix();
-                    continue;
-                }
-                const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
-                at[j] = up;
-                model.predict(at.data(), s, first);
-                d = s.u_d.matrix();
-                q = s.u_q.matrix();
-                at[j] = down;
-                model.predict(at.data(), s, first);
-                d = (d - s.u_d.matrix()) / (up - down);
-                q = (q - s.u_q.matrix()) / (up - down);
-                at[j] = values[j];
-            }
+            const Eigen::Index first = model.block_first(b), rows = model.block_size(b);
+            block_jacobian(model, values, columns, b, at, jacobian.block(first, 0, rows, p), jacobian.block(n + first, 0, rows, p));
         }
     });
     return jacobian;
@@ -482,8 +483,6 @@ RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const
                                             const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts) {
     const auto& data = model.data();
     const auto p = static_cast<Eigen::Index>(columns.size());
-    const auto& lo = model.bounds().lower;
-    const auto& hi = model.bounds().upper;
     // Each block's share, per range it touches; merged in block order so that any thread count
     // gives the same sums.
     struct Share {
@@ -499,32 +498,13 @@ RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const
         Eigen::MatrixXd jacobian;
         Eigen::VectorXd residual;
         for (Eigen::Index b = blocks.begin(); b != blocks.end(); ++b) {
-            const int size = model.scratch_index(b);
-            AffinePrediction& a = scratch.affine[size];
-            ModelState& s = scratch.state[size];
-            const Eigen::Index first = model.block_first(b), rows = a.rows();
-            jacobian.resize(2 * rows, p);
+            ModelState& s = scratch.state[model.scratch_index(b)];
+            const Eigen::Index first = model.block_first(b), rows = model.block_size(b);
             model.predict(values.data(), s, first);
             residual.resize(2 * rows);
             residual << data.u_d.segment(first, rows) - s.u_d.matrix(), data.u_q.segment(first, rows) - s.u_q.matrix();
-            model.predict_affine(values.data(), a, first);
-            for (Eigen::Index c = 0; c < p; ++c) {
-                const Eigen::Index j = columns[static_cast<std::size_t>(c)];
-                if (j < 4) {
-                    jacobian.col(c) << a.phi_d.col(j).matrix(), a.phi_q.col(j).matrix();
-                    continue;
-                }
-                const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
-                at[j] = up;
-                model.predict(at.data(), s, first);
-                jacobian.col(c) << s.u_d.matrix(), s.u_q.matrix();
-                at[j] = down;
-                model.predict(at.data(), s, first);
-                jacobian.col(c).head(rows) -= s.u_d.matrix();
-                jacobian.col(c).tail(rows) -= s.u_q.matrix();
-                jacobian.col(c) /= up - down;
-                at[j] = values[j];
-            }
+            jacobian.resize(2 * rows, p);
+            block_jacobian(model, values, columns, b, at, jacobian.topRows(rows), jacobian.bottomRows(rows));
             auto& out = shares[static_cast<std::size_t>(b)];
             out.clear();
             // The ranges this block's rows fall in, each a run of consecutive rows.
