@@ -35,13 +35,19 @@ public:
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
+        // EmfPhasors::at written out in real arithmetic (complex products keep a NaN branch that
+        // stops vectorisation): fifth conj(sixth) + seventh sixth = (a c6 + b s6) + j (c c6 + d s6).
         const EmfPhasors emf(p);
+        const double a = emf.fifth.real() + emf.seventh.real(), b = emf.fifth.imag() - emf.seventh.imag();
+        const double c = emf.fifth.imag() + emf.seventh.imag(), d = emf.seventh.real() - emf.fifth.real();
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-            const Complex rotor{s.cos_theta[k], s.sin_theta[k]};
-            const Complex cube = rotor * rotor * rotor;
-            const Complex e = s.omega[k] * emf.at(cube * cube, s.psi_f[k]);
-            s.u_d[k] += e.real();
-            s.u_q[k] += e.imag();
+            const double c1 = s.cos_theta[k], s1 = s.sin_theta[k];
+            const double c2 = c1 * c1 - s1 * s1, s2 = 2.0 * c1 * s1;
+            const double c4 = c2 * c2 - s2 * s2, s4 = 2.0 * c2 * s2;
+            const double c6 = c4 * c2 - s4 * s2, s6 = s4 * c2 + c4 * s2;
+            const double scale = s.omega[k] * s.psi_f[k];
+            s.u_d[k] += scale * (a * c6 + b * s6);
+            s.u_q[k] += scale * (c * c6 + d * s6);
         }
     }
 };
