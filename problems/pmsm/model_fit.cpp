@@ -136,20 +136,32 @@ public:
     // solve_least_squares (column scaling, pivoting, minimum norm).
     Eigen::Vector4d exact_base(const Workspace& w) const {
         const auto& data = model_.data();
-        Eigen::Matrix<double, 5, 5> r = Eigen::Matrix<double, 5, 5>::Zero();
-        Eigen::MatrixXd stacked;
-        auto& scratch = model_.scratch();
-        for (Eigen::Index b = 0; b < model_.blocks(); ++b) {
-            AffinePrediction& a = scratch.affine[model_.scratch_index(b)];
-            const Eigen::Index first = model_.block_first(b), rows = a.rows();
-            model_.predict_affine(w.values.data(), a, first);
-            stacked.resize(5 + 2 * rows, 5);
-            stacked.topRows<5>() = r;
-            stacked.block(5, 0, rows, 4) = a.phi_d.matrix();
-            stacked.block(5 + rows, 0, rows, 4) = a.phi_q.matrix();
-            stacked.col(4).segment(5, rows) = data.u_d.segment(first, rows) - a.offset_d.matrix();
-            stacked.col(4).segment(5 + rows, rows) = data.u_q.segment(first, rows) - a.offset_q.matrix();
-            const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
+        using Triangle = Eigen::Matrix<double, 5, 5>;
+        // Each block's own factor in parallel, then the factors folded in block order: the same
+        // numbers on any number of threads.
+        std::vector<Triangle> factors(static_cast<std::size_t>(model_.blocks()));
+        tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model_.blocks()), [&](const tbb::blocked_range<Eigen::Index>& range) {
+            auto& scratch = model_.scratch();
+            Eigen::MatrixXd stacked;
+            for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
+                AffinePrediction& a = scratch.affine[model_.scratch_index(b)];
+                const Eigen::Index first = model_.block_first(b), rows = a.rows();
+                model_.predict_affine(w.values.data(), a, first);
+                stacked.resize(std::max<Eigen::Index>(2 * rows, 5), 5);
+                stacked.setZero();
+                stacked.block(0, 0, rows, 4) = a.phi_d.matrix();
+                stacked.block(rows, 0, rows, 4) = a.phi_q.matrix();
+                stacked.col(4).segment(0, rows) = data.u_d.segment(first, rows) - a.offset_d.matrix();
+                stacked.col(4).segment(rows, rows) = data.u_q.segment(first, rows) - a.offset_q.matrix();
+                const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
+                factors[static_cast<std::size_t>(b)] = qr.matrixQR().topRows<5>().triangularView<Eigen::Upper>();
+            }
+        });
+        Triangle r = Triangle::Zero();
+        Eigen::Matrix<double, 10, 5> pair;
+        for (const auto& factor : factors) {
+            pair << r, factor;
+            const Eigen::HouseholderQR<Eigen::Matrix<double, 10, 5>> qr(pair);
             r = qr.matrixQR().topRows<5>().triangularView<Eigen::Upper>();
         }
         return solve_least_squares(r.topLeftCorner<4, 4>(), r.col(4).head<4>()).solution;
@@ -215,8 +227,15 @@ ParameterInfo parameter_info(const SteadyStateModel& model) {
 // Levenberg-Marquardt on the projected residual over the `moving` effect parameters, each kept in its
 // range (angles of a full turn wrap). Each iteration reduces the rows once to the normal equations of
 // all parameters (range_normal_equations) and eliminates the base parameters from them (Kaufman's
-// form of variable projection: the Schur complement), so no row-sized array is kept. Returns the
-// iterations used.
+// form of variable projection: the Schur complement), so no row-sized array is kept.
+//
+// The Gauss-Newton matrix leaves out the residual's own curvature, which is not small when the model
+// misses part of what it fits: inside a dead-time band the rows that see the band change with it, and
+// the steps along the valley of voltage and band then converge only linearly (a third of the gain
+// left per iteration, a dozen passes over a million rows). So, as NL2SOL does (Dennis, Gay and
+// Welsch 1981), a secant estimate S of the left-out term is kept from the gradients of successive
+// iterations, and each step uses the Gauss-Newton matrix or it plus S, whichever predicted the last
+// step's actual gain better. Returns the iterations used.
 int polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
            const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
     double rss = projection.project(w);
@@ -237,6 +256,10 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
     columns.insert(columns.end(), moving.begin(), moving.end());
     const std::vector<Eigen::Index> all_rows{0};
     Eigen::VectorXd values(w.values.size());
+    // The secant part: S, and the last step and gradient it is updated from.
+    Eigen::MatrixXd secant = Eigen::MatrixXd::Zero(m, m);
+    Eigen::VectorXd last_step, last_gradient;
+    bool use_secant = false;
     double lambda = 1e-3;
     int iteration = 0;
     for (; iteration < 100; ++iteration) {
@@ -248,8 +271,21 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
         const Eigen::MatrixXd base_inverse = scaled_pseudo_inverse(jj.topLeftCorner(4, 4));
         const Eigen::MatrixXd cross = jj.bottomLeftCorner(m, 4) * base_inverse;
         const Eigen::MatrixXd normal = jj.bottomRightCorner(m, m) - cross * jj.topRightCorner(4, m);
-        // Of the residual's sum of squares (the residual is logged minus predicted).
+        // Of half the residual's sum of squares (the residual is logged minus predicted).
         const Eigen::VectorXd gradient = -(jr.tail(m) - cross * jr.head(4));
+        if (last_step.size() == m) {
+            // Dennis, Gay and Welsch's update: S s = y - A s for the step s just taken and the change
+            // y of the gradient along it, after sizing S down to what that step saw of it.
+            const Eigen::VectorXd y = gradient - last_gradient;
+            const double ys = y.dot(last_step);
+            if (ys > 0.0) {
+                const Eigen::VectorXd left_out = y - normal * last_step;
+                const double sss = last_step.dot(secant * last_step);
+                if (sss > 0.0) secant *= std::min(1.0, std::abs(last_step.dot(left_out)) / sss);
+                const Eigen::VectorXd v = left_out - secant * last_step;
+                secant += (v * y.transpose() + y * v.transpose()) / ys - (v.dot(last_step) / (ys * ys)) * (y * y.transpose());
+            }
+        }
         // Parameters at a bound that the gradient pushes outward are held this iteration.
         std::vector<Eigen::Index> step_on;
         for (Eigen::Index j = 0; j < m; ++j) {
@@ -260,22 +296,32 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
         }
         bool improved = false;
         double new_rss = rss;
+        Eigen::VectorXd taken = Eigen::VectorXd::Zero(m);
         if (!step_on.empty()) {
             const auto f = static_cast<Eigen::Index>(step_on.size());
-            Eigen::MatrixXd a(f, f);
+            Eigen::MatrixXd a(f, f), s(f, f);
             Eigen::VectorXd g(f);
             for (Eigen::Index r = 0; r < f; ++r) {
                 g[r] = gradient[step_on[static_cast<std::size_t>(r)]];
-                for (Eigen::Index c = 0; c < f; ++c) a(r, c) = normal(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
+                for (Eigen::Index c = 0; c < f; ++c) {
+                    a(r, c) = normal(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
+                    s(r, c) = secant(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
+                }
             }
             // The Gauss-Newton step's predicted gain, before any trial pass over the rows.
             const Eigen::VectorXd full_step = scaled_pseudo_inverse(a) * -g;
             if (negligible(-g.dot(full_step))) break;
             const Eigen::VectorXd diagonal = a.diagonal().cwiseMax(1e-15 * a.diagonal().maxCoeff() + 1e-300);
             for (int attempt = 0; attempt < 12 && !improved; ++attempt) {
-                Eigen::MatrixXd damped = a;
+                Eigen::MatrixXd damped = use_secant ? Eigen::MatrixXd(a + s) : a;
                 damped.diagonal() += lambda * diagonal;
-                const Eigen::VectorXd delta = damped.ldlt().solve(-g);
+                const Eigen::LDLT<Eigen::MatrixXd> ldlt(damped);
+                if (use_secant && !(ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all())) {
+                    use_secant = false;  // S made the model indefinite here: Gauss-Newton's alone
+                    --attempt;
+                    continue;
+                }
+                const Eigen::VectorXd delta = ldlt.solve(-g);
                 w.values = values;
                 for (Eigen::Index r = 0; r < f; ++r) {
                     const Eigen::Index p = moving[static_cast<std::size_t>(step_on[static_cast<std::size_t>(r)])];
@@ -285,6 +331,11 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
                 if (new_rss < rss) {
                     improved = true;
                     lambda = std::max(lambda / 3.0, 1e-12);
+                    // Which model to trust next: the one whose predicted gain was nearer the actual.
+                    const double linear = -2.0 * g.dot(delta);
+                    const double by_normal = linear - delta.dot(a * delta), by_secant = by_normal - delta.dot(s * delta);
+                    const double actual = rss - new_rss;
+                    use_secant = std::abs(by_secant - actual) < std::abs(by_normal - actual);
                     continue;
                 }
                 lambda *= 4.0;
@@ -305,6 +356,14 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
             projection.project(w);
             break;
         }
+        // The step as taken (after clamping, an angle's wrap undone), for the next secant update.
+        for (Eigen::Index j = 0; j < m; ++j) {
+            const Eigen::Index p = moving[static_cast<std::size_t>(j)];
+            taken[j] = w.values[p] - values[p];
+            if (periodic[static_cast<std::size_t>(p)]) taken[j] = std::remainder(taken[j], hi[p] - lo[p]);
+        }
+        last_step = taken;
+        last_gradient = gradient;
         const double gain = rss - new_rss;
         rss = new_rss;
         if (negligible(gain)) {
@@ -393,7 +452,6 @@ ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Proj
     const auto info = parameter_info(model);
     const int iterations = polish(projection, model, w, moving, info.periodic);
     // The base parameters once more by column-pivoting QR, for the reported values.
-    projection.project(w);
     w.values.head<4>() = projection.exact_base(w);
     ModelFit fit = assemble(model, spec, w.values, covariance, intervals);
     fit.evaluations = evaluations;
@@ -495,16 +553,19 @@ RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, model.blocks()), [&](const tbb::blocked_range<Eigen::Index>& blocks) {
         auto& scratch = model.scratch();
         Eigen::VectorXd at = values;
-        Eigen::MatrixXd jacobian;
-        Eigen::VectorXd residual;
+        // [J | r]: the Jacobian's d rows over its q rows, the residual as the last column, so that one
+        // symmetric rank update per range gives J'J, J'r and r'r together.
+        Eigen::MatrixXd augmented;
+        Eigen::MatrixXd product(p + 1, p + 1);
         for (Eigen::Index b = blocks.begin(); b != blocks.end(); ++b) {
-            ModelState& s = scratch.state[model.scratch_index(b)];
             const Eigen::Index first = model.block_first(b), rows = model.block_size(b);
-            model.predict(values.data(), s, first);
-            residual.resize(2 * rows);
-            residual << data.u_d.segment(first, rows) - s.u_d.matrix(), data.u_q.segment(first, rows) - s.u_q.matrix();
-            jacobian.resize(2 * rows, p);
-            block_jacobian(model, values, columns, b, at, jacobian.topRows(rows), jacobian.bottomRows(rows));
+            augmented.resize(2 * rows, p + 1);
+            block_jacobian(model, values, columns, b, at, augmented.topLeftCorner(rows, p), augmented.bottomLeftCorner(rows, p));
+            // The prediction at `values` from the affine split block_jacobian left behind.
+            const AffinePrediction& a = scratch.affine[model.scratch_index(b)];
+            auto residual_d = augmented.col(p).head(rows), residual_q = augmented.col(p).tail(rows);
+            residual_d = data.u_d.segment(first, rows) - a.offset_d.matrix() - a.phi_d.matrix() * values.head<4>();
+            residual_q = data.u_q.segment(first, rows) - a.offset_q.matrix() - a.phi_q.matrix() * values.head<4>();
             auto& out = shares[static_cast<std::size_t>(b)];
             out.clear();
             // The ranges this block's rows fall in, each a run of consecutive rows.
@@ -513,13 +574,18 @@ RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const
                 const Eigen::Index end =
                     range + 1 < starts.size() ? std::min(rows, starts[range + 1] - first) : rows;
                 const Eigen::Index count = end - k;
+                product.setZero();
+                auto lower = product.selfadjointView<Eigen::Lower>();
+                if (count == rows) lower.rankUpdate(augmented.transpose());
+                else {
+                    lower.rankUpdate(augmented.middleRows(k, count).transpose());
+                    lower.rankUpdate(augmented.middleRows(rows + k, count).transpose());
+                }
                 Share share;
                 share.range = range;
-                share.gram = jacobian.middleRows(k, count).transpose() * jacobian.middleRows(k, count) +
-                             jacobian.middleRows(rows + k, count).transpose() * jacobian.middleRows(rows + k, count);
-                share.moment = jacobian.middleRows(k, count).transpose() * residual.segment(k, count) +
-                               jacobian.middleRows(rows + k, count).transpose() * residual.segment(rows + k, count);
-                share.total = residual.segment(k, count).squaredNorm() + residual.segment(rows + k, count).squaredNorm();
+                share.gram = product.topLeftCorner(p, p).selfadjointView<Eigen::Lower>();
+                share.moment = product.row(p).head(p).transpose();
+                share.total = product(p, p);
                 out.push_back(std::move(share));
                 k = end;
                 ++range;
@@ -617,35 +683,44 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
     const auto k = static_cast<std::int64_t>(searched.size());
     const std::int64_t budget = options.evaluations > 0 ? options.evaluations : 150 + 50 * k;
     const TrialRecord record = run_trial(*optimizer, problem, TrialSetup{Budget{0, budget}, options.seed, false});
-    // The optimiser's best, or the start when that is better (the start is a declared typical value).
-    const double start_rss = projection.project(w);
     std::string method = fmt::format("{} over {} effect parameter{} ({} evaluations{})", options.optimizer, k, k == 1 ? "" : "s",
                                      record.evaluations,
                                      sample_model ? fmt::format(" on {} of the {} rows", rows.size(), data.size()) : "");
     if (!record.ok) method += " [the optimiser failed: " + record.error + "]";
-    // Compared on all rows: the subsample's optimum is only a candidate. It is polished on the
-    // subsample first, where an iteration is cheap, so that few are left for all rows.
+    // The optimiser's best, or the start when that is better (the start is a declared typical value).
     w.values = initial;
     if (record.best_position.size() == k) {
-        auto best = projection.workspace(initial);
-        for (std::size_t j = 0; j < searched.size(); ++j) best.values[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
-        if (sample_projection) {
-            // Then on subsets ten times larger each, up to all rows: each starts nearer the optimum
-            // of all rows, so the polish on all rows needs few of its expensive iterations.
+        Eigen::VectorXd best = initial;
+        for (std::size_t j = 0; j < searched.size(); ++j) best[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
+        if (!sample_projection) {
+            auto candidate = projection.workspace(best);
+            if (projection.project(candidate) < projection.project(w)) w.values = candidate.values;
+        } else {
+            // On a subsample both are polished, where an iteration is cheap, and the better one goes
+            // on: a search can miss a narrow valley (a dead-time band of milliamperes, in a box of
+            // amperes whose larger part is a plateau that the base resistance absorbs), and its
+            // polish would then be left to the expensive passes over all rows. Then it is polished
+            // on subsets ten times larger each, up to all rows: each starts nearer the optimum of all
+            // rows, so the polish on all rows needs few iterations.
             const auto periodic = parameter_info(*model).periodic;
-            auto sample = sample_projection->workspace(best.values);
-            polish(*sample_projection, *sample_model, sample, moving, periodic);
-            best.values = sample.values;
+            auto polished_on_sample = [&](const Eigen::VectorXd& from) {
+                auto sample = sample_projection->workspace(from);
+                polish(*sample_projection, *sample_model, sample, moving, periodic);
+                return std::pair{sample_projection->project(sample), sample.values};
+            };
+            const auto [search_rss, from_search] = polished_on_sample(best);
+            const auto [start_rss, from_start] = polished_on_sample(initial);
+            best = start_rss < search_rss ? from_start : from_search;
             FitOptions level = options;
             for (level.search_rows = 10 * options.search_rows; level.search_rows < data.size(); level.search_rows *= 10) {
                 const auto subset = make_model(spec, select_rows(data, search_subsample(data.size(), level)));
                 const Projection subset_projection(*subset);
-                auto on_subset = subset_projection.workspace(best.values);
+                auto on_subset = subset_projection.workspace(best);
                 polish(subset_projection, *subset, on_subset, moving, periodic);
-                best.values = on_subset.values;
+                best = on_subset.values;
             }
+            w.values = best;
         }
-        if (projection.project(best) < start_rss) w.values = best.values;
     }
     return finish(*model, spec, projection, w, moving, options.covariance, options.intervals, record.evaluations, method);
 }
