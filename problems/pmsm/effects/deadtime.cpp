@@ -3,7 +3,7 @@
 // (the current ripple and snubber charge make it so). In dq this is (4/pi) V_dt i/|i| plus a 6 omega
 // ripple: an "extra resistance" that is largest at small current.
 #include <algorithm>
-#include <limits>
+#include <cmath>
 #include <numbers>
 
 #include "problems/pmsm/effects/effect.hpp"
@@ -11,43 +11,50 @@
 namespace mhb::pmsm {
 namespace {
 
-double phase_sign(double i, double band) {
-    if (band > 0.0) return std::clamp(i / band, -1.0, 1.0);
-    return i > 0.0 ? 1.0 : (i < 0.0 ? -1.0 : 0.0);
-}
+// Voltage lost at the terminals, in the rotor frame, from the three phase currents: one set of
+// parameters, evaluated per sample by at(). Written in real arithmetic because complex products keep a
+// NaN branch that stops the model's loop over a block of rows from vectorising.
+class TerminalLoss {
+public:
+    TerminalLoss(double voltage, double band) : voltage_(voltage), band_(band), per_ampere_(band > 0.0 ? 1.0 / band : 0.0) {}
 
-// Voltage lost at the terminals, rotor frame, from the three phase currents; `rotor` is e^{j theta}.
-Complex terminal_loss(double voltage, double band, Complex rotor, Complex i_dq) {
-    const auto phase = inverse_clarke(i_dq * rotor);
-    return clarke(voltage * phase_sign(phase[0], band), voltage * phase_sign(phase[1], band), voltage * phase_sign(phase[2], band)) *
-           std::conj(rotor);
-}
+    // (cos_theta, sin_theta) = e^{j theta}; i_d, i_q the rotor-frame currents.
+    Complex at(double cos_theta, double sin_theta, double i_d, double i_q) const {
+        const double alpha = i_d * cos_theta - i_q * sin_theta, beta = i_d * sin_theta + i_q * cos_theta;
+        const double half_root3 = 0.5 * std::numbers::sqrt3;
+        const double a = sign(alpha), b = sign(-0.5 * alpha + half_root3 * beta), c = sign(-0.5 * alpha - half_root3 * beta);
+        // Clarke of the phase losses, then into the rotor frame.
+        const double loss_alpha = voltage_ * (2.0 * a - b - c) / 3.0, loss_beta = voltage_ * (b - c) / std::numbers::sqrt3;
+        return {loss_alpha * cos_theta + loss_beta * sin_theta, loss_beta * cos_theta - loss_alpha * sin_theta};
+    }
+
+private:
+    // A phase current's direction, linear through zero over the band.
+    double sign(double i) const {
+        if (band_ > 0.0) return std::clamp(i * per_ampere_, -1.0, 1.0);
+        return i > 0.0 ? 1.0 : (i < 0.0 ? -1.0 : 0.0);
+    }
+
+    double voltage_, band_, per_ampere_;
+};
 
 class DeadTime final : public Effect {
 public:
     explicit DeadTime(const ParameterSet& p) : Effect("deadtime", p) {}
 
     Complex plant_inverter_loss(double theta, Complex i) const override {
-        return terminal_loss(values()[0], values()[1], std::polar(1.0, theta), i);
+        return TerminalLoss(values()[0], values()[1]).at(std::cos(theta), std::sin(theta), i.real(), i.imag());
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
-            // terminal_loss written out in real arithmetic, without a branch, so that the compiler
-            // vectorises it: this loop is a sixth of a long-log diagnosis.
-            const double voltage = p[0], band = p[1];
-            const double to_sign = band > 0.0 ? 1.0 / band : std::numeric_limits<double>::infinity();
-            const double half_root3 = 0.5 * std::numbers::sqrt3;
-            auto sign_of = [&](double i) { return band > 0.0 ? std::clamp(i * to_sign, -1.0, 1.0) : (i > 0.0) - (i < 0.0) + 0.0; };
+            const TerminalLoss loss(p[0], p[1]);
             for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-                const double c = s.cos_theta[k], sn = s.sin_theta[k];
-                const double alpha = s.i_d[k] * c - s.i_q[k] * sn, beta = s.i_d[k] * sn + s.i_q[k] * c;
-                const double a = sign_of(alpha), b = sign_of(-0.5 * alpha + half_root3 * beta), cc = sign_of(-0.5 * alpha - half_root3 * beta);
-                const double v_alpha = voltage * (2.0 * a - b - cc) / 3.0, v_beta = voltage * (b - cc) / std::numbers::sqrt3;
-                s.u_d[k] += v_alpha * c + v_beta * sn;
-                s.u_q[k] += v_beta * c - v_alpha * sn;
+                const Complex l = loss.at(s.cos_theta[k], s.sin_theta[k], s.i_d[k], s.i_q[k]);
+                s.u_d[k] += l.real();
+                s.u_q[k] += l.imag();
             }
             return;
         }

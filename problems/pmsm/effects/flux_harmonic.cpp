@@ -13,13 +13,26 @@ Complex ripple_flux(const double* p, double theta, double psi_f) {
 }
 
 // The back-EMF of the ripple per unit electrical speed and flux is j [-5 h5 e^{-j(6 theta + phi5)}
-// + 7 h7 e^{j(6 theta + phi7)}]: two fixed phasors, here once per parameter set, turned by e^{j 6 theta}.
-struct EmfPhasors {
-    Complex fifth, seventh;
-    explicit EmfPhasors(const double* p)
-        : fifth(Complex{0.0, -5.0 * p[0]} * std::polar(1.0, -p[1])), seventh(Complex{0.0, 7.0 * p[2]} * std::polar(1.0, p[3])) {}
-    // Back-EMF per unit electrical speed (V s/rad); `sixth` is e^{j 6 theta}.
-    Complex at(Complex sixth, double psi_f) const { return psi_f * (fifth * std::conj(sixth) + seventh * sixth); }
+// + 7 h7 e^{j(6 theta + phi7)}]: two fixed phasors F and S, here once per parameter set, turned by
+// e^{j 6 theta} = c6 + j s6. F conj(e^{j 6 theta}) + S e^{j 6 theta} = (a c6 + b s6) + j (c c6 + d s6),
+// kept as those four reals because complex products keep a NaN branch that stops the model's loop
+// over a block of rows from vectorising.
+class EmfPhasors {
+public:
+    explicit EmfPhasors(const double* p) {
+        const Complex fifth = Complex{0.0, -5.0 * p[0]} * std::polar(1.0, -p[1]);
+        const Complex seventh = Complex{0.0, 7.0 * p[2]} * std::polar(1.0, p[3]);
+        a_ = fifth.real() + seventh.real();
+        b_ = fifth.imag() - seventh.imag();
+        c_ = fifth.imag() + seventh.imag();
+        d_ = seventh.real() - fifth.real();
+    }
+    // Back-EMF per unit electrical speed (V s/rad) at cos(6 theta) = c6, sin(6 theta) = s6; times
+    // omega when `psi_f` is omega psi_f.
+    Complex at(double c6, double s6, double psi_f) const { return {psi_f * (a_ * c6 + b_ * s6), psi_f * (c_ * c6 + d_ * s6)}; }
+
+private:
+    double a_ = 0.0, b_ = 0.0, c_ = 0.0, d_ = 0.0;
 };
 
 class FluxHarmonic final : public Effect {
@@ -28,26 +41,23 @@ public:
 
     Complex plant_flux_ripple(double theta, double psi_f) const override { return ripple_flux(values().data(), theta, psi_f); }
     Complex plant_emf_ripple(double theta, double psi_f) const override {
-        return EmfPhasors(values().data()).at(std::polar(1.0, 6.0 * theta), psi_f);
+        return EmfPhasors(values().data()).at(std::cos(6.0 * theta), std::sin(6.0 * theta), psi_f);
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::MachineVoltage); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
-        // EmfPhasors::at written out in real arithmetic (complex products keep a NaN branch that
-        // stops vectorisation): fifth conj(sixth) + seventh sixth = (a c6 + b s6) + j (c c6 + d s6).
         const EmfPhasors emf(p);
-        const double a = emf.fifth.real() + emf.seventh.real(), b = emf.fifth.imag() - emf.seventh.imag();
-        const double c = emf.fifth.imag() + emf.seventh.imag(), d = emf.seventh.real() - emf.fifth.real();
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+            // e^{j 6 theta} from the logged angle's cosine and sine by three squarings and a product.
             const double c1 = s.cos_theta[k], s1 = s.sin_theta[k];
             const double c2 = c1 * c1 - s1 * s1, s2 = 2.0 * c1 * s1;
             const double c4 = c2 * c2 - s2 * s2, s4 = 2.0 * c2 * s2;
             const double c6 = c4 * c2 - s4 * s2, s6 = s4 * c2 + c4 * s2;
-            const double scale = s.omega[k] * s.psi_f[k];
-            s.u_d[k] += scale * (a * c6 + b * s6);
-            s.u_q[k] += scale * (c * c6 + d * s6);
+            const Complex e = emf.at(c6, s6, s.omega[k] * s.psi_f[k]);
+            s.u_d[k] += e.real();
+            s.u_q[k] += e.imag();
         }
     }
 };
