@@ -231,16 +231,20 @@ ParameterInfo parameter_info(const SteadyStateModel& model) {
 //
 // The Gauss-Newton matrix leaves out the residual's own curvature, which is not small when the model
 // misses part of what it fits: inside a dead-time band the rows that see the band change with it, and
-// the steps along the valley of voltage and band then converge only linearly (a third of the gain
+// the steps along the valley of voltage and band then converge only linearly (a quarter to two fifths of the gain
 // left per iteration, a dozen passes over a million rows). So, as NL2SOL does (Dennis, Gay and
 // Welsch 1981), a secant estimate S of the left-out term is kept from the gradients of successive
 // iterations, and each step uses the Gauss-Newton matrix or it plus S, whichever predicted the last
-// step's actual gain better. Returns the iterations used.
-int polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
-           const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
+// step's actual gain better. Leaves w at the result, its base parameters solved.
+struct Polished {
+    int iterations = 0;
+    double rss = 0.0;  // at the result
+};
+Polished polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
+                const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
     double rss = projection.project(w);
     const auto m = static_cast<Eigen::Index>(moving.size());
-    if (m == 0) return 0;
+    if (m == 0) return {0, rss};
     const auto& lo = model.bounds().lower;
     const auto& hi = model.bounds().upper;
     auto place = [&](Eigen::VectorXd& v, Eigen::Index p, double x) {
@@ -299,15 +303,8 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
         Eigen::VectorXd taken = Eigen::VectorXd::Zero(m);
         if (!step_on.empty()) {
             const auto f = static_cast<Eigen::Index>(step_on.size());
-            Eigen::MatrixXd a(f, f), s(f, f);
-            Eigen::VectorXd g(f);
-            for (Eigen::Index r = 0; r < f; ++r) {
-                g[r] = gradient[step_on[static_cast<std::size_t>(r)]];
-                for (Eigen::Index c = 0; c < f; ++c) {
-                    a(r, c) = normal(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
-                    s(r, c) = secant(step_on[static_cast<std::size_t>(r)], step_on[static_cast<std::size_t>(c)]);
-                }
-            }
+            const Eigen::MatrixXd a = normal(step_on, step_on), s = secant(step_on, step_on);
+            const Eigen::VectorXd g = gradient(step_on);
             // The Gauss-Newton step's predicted gain, before any trial pass over the rows.
             const Eigen::VectorXd full_step = scaled_pseudo_inverse(a) * -g;
             if (negligible(-g.dot(full_step))) break;
@@ -371,7 +368,7 @@ int polish(const Projection& projection, const SteadyStateModel& model, Projecti
             break;
         }
     }
-    return iteration;
+    return {iteration, rss};
 }
 
 ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& values,
@@ -450,7 +447,7 @@ ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Proj
                 Projection::Workspace& w, const std::vector<Eigen::Index>& moving, CovarianceMethod covariance, bool intervals,
                 std::int64_t evaluations, std::string method) {
     const auto info = parameter_info(model);
-    const int iterations = polish(projection, model, w, moving, info.periodic);
+    const int iterations = polish(projection, model, w, moving, info.periodic).iterations;
     // The base parameters once more by column-pivoting QR, for the reported values.
     w.values.head<4>() = projection.exact_base(w);
     ModelFit fit = assemble(model, spec, w.values, covariance, intervals);
@@ -705,8 +702,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
             const auto periodic = parameter_info(*model).periodic;
             auto polished_on_sample = [&](const Eigen::VectorXd& from) {
                 auto sample = sample_projection->workspace(from);
-                polish(*sample_projection, *sample_model, sample, moving, periodic);
-                return std::pair{sample_projection->project(sample), sample.values};
+                return std::pair{polish(*sample_projection, *sample_model, sample, moving, periodic).rss, sample.values};
             };
             const auto [search_rss, from_search] = polished_on_sample(best);
             const auto [start_rss, from_start] = polished_on_sample(initial);
@@ -729,7 +725,6 @@ Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec
     const Projection projection(model);
     auto w = projection.workspace(start);
     polish(projection, model, w, free_effect_parameters(free_parameters(spec)), parameter_info(model).periodic);
-    projection.project(w);
     return w.values;
 }
 
