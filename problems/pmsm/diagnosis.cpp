@@ -307,19 +307,11 @@ std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSp
     const auto free = free_parameters(spec);
     const auto& lo = model->bounds().lower;
     const auto& hi = model->bounds().upper;
+    const auto periodic = periodic_parameters(*model);
     std::vector<Eigen::Index> columns;
-    std::vector<bool> periodic;
-    for (const auto& e : model->effects())
-        for (const auto& p : e->parameter_specs())
-            if (p.type == ParameterType::Real) periodic.push_back(is_periodic(p));
-    for (Eigen::Index j = 0; j < values.size(); ++j) {
-        if (!free[static_cast<std::size_t>(j)]) continue;
-        if (j >= 4 && !periodic[static_cast<std::size_t>(j - 4)]) {
-            const double slack = 1e-9 * (hi[j] - lo[j]);
-            if (values[j] <= lo[j] + slack || values[j] >= hi[j] - slack) continue;
-        }
-        columns.push_back(j);
-    }
+    for (Eigen::Index j = 0; j < values.size(); ++j)
+        if (free[static_cast<std::size_t>(j)] && (j < 4 || !at_range_end(values[j], lo[j], hi[j], periodic[static_cast<std::size_t>(j)])))
+            columns.push_back(j);
     std::vector<Eigen::Index> starts;
     for (const auto& r : ranges) starts.push_back(r.first);
     const auto sums = range_normal_equations(*model, values, columns, starts);

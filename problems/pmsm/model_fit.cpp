@@ -214,13 +214,10 @@ struct ParameterInfo {
 ParameterInfo parameter_info(const SteadyStateModel& model) {
     ParameterInfo info;
     info.units = {"Ω", "H", "H", "Wb"};
-    info.periodic.assign(4, false);
     for (const auto& e : model.effects())
-        for (const auto& s : e->parameter_specs()) {
-            if (s.type != ParameterType::Real) continue;
-            info.units.push_back(s.unit);
-            info.periodic.push_back(is_periodic(s));
-        }
+        for (const auto& s : e->parameter_specs())
+            if (s.type == ParameterType::Real) info.units.push_back(s.unit);
+    info.periodic = periodic_parameters(model);
     return info;
 }
 
@@ -471,9 +468,22 @@ Eigen::Index ModelFit::index_of(const std::string& name) const {
 }
 
 bool ModelFit::at_bound(Eigen::Index j) const {
-    if (j < 4 || !free[static_cast<std::size_t>(j)] || periodic[static_cast<std::size_t>(j)]) return false;
-    const double slack = 1e-9 * (range_upper[j] - range_lower[j]);
-    return values[j] <= range_lower[j] + slack || values[j] >= range_upper[j] - slack;
+    if (j < 4 || !free[static_cast<std::size_t>(j)]) return false;
+    return at_range_end(values[j], range_lower[j], range_upper[j], periodic[static_cast<std::size_t>(j)]);
+}
+
+std::vector<bool> periodic_parameters(const SteadyStateModel& model) {
+    std::vector<bool> out(4, false);
+    for (const auto& e : model.effects())
+        for (const auto& s : e->parameter_specs())
+            if (s.type == ParameterType::Real) out.push_back(is_periodic(s));
+    return out;
+}
+
+bool at_range_end(double value, double lo, double hi, bool periodic) {
+    if (periodic) return false;
+    const double slack = 1e-9 * (hi - lo);
+    return value <= lo + slack || value >= hi - slack;
 }
 
 Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::VectorXd& values) {

@@ -108,6 +108,12 @@ struct RangeNormalEquations {
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                             const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts);
 
+// Which of the model's parameters (base first) are angles whose range is a full turn.
+std::vector<bool> periodic_parameters(const SteadyStateModel& model);
+// Whether `value` sits at an end of its range [lo, hi] (within 1e-9 of its width); an angle of a full
+// turn never does.
+bool at_range_end(double value, double lo, double hi, bool periodic);
+
 // Residual summaries of a stacked residual over the rows of `data`.
 AxisRms axis_rms(const Eigen::VectorXd& residual, Eigen::Index samples);
 std::vector<SegmentResidual> segment_residuals(const Measurement& data, const Eigen::VectorXd& residual);
