@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <Eigen/Dense>
+#include <tbb/task_arena.h>
 
 #include "framework/random.hpp"
 #include "problems/pmsm/linear_fit.hpp"
@@ -158,4 +159,101 @@ TEST_CASE("parameter uncertainty refuses mismatched layouts and flags unidentifi
     no_injection.col(1).setZero();
     const auto u = parameter_uncertainty(no_injection, y, Eigen::Vector4d(46.0, 0.0, 0.02, 0.04), layout, CovarianceMethod::White);
     CHECK(std::isinf(u.standard_error[1]));
+}
+
+namespace {
+
+// The prewhitened Newey-West covariance written out as its definition (docs/pmsm.md, "Uncertainty"):
+// the scores as a matrix, the Andrews bandwidth from direct sums, the Bartlett double sum over lags.
+Eigen::MatrixXd direct_newey_west(const Eigen::MatrixXd& phi, const Eigen::VectorXd& r, const RowLayout& layout, double& lag) {
+    const Eigen::Index n = layout.samples, p = phi.cols();
+    auto starts = [&](Eigen::Index t) { return t == 0 || layout.block[t] != layout.block[t - 1]; };
+    Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(p, n);
+    for (int a = 0; a < 2; ++a) {
+        double sxy = 0.0, sxx = 0.0;
+        for (Eigen::Index t = 0; t < n; ++t)
+            if (!starts(t)) {
+                sxy += r[a * n + t] * r[a * n + t - 1];
+                sxx += r[a * n + t - 1] * r[a * n + t - 1];
+            }
+        const double rho = std::clamp(sxy / sxx, -0.97, 0.97);
+        for (Eigen::Index t = 0; t < n; ++t) {
+            const double e = starts(t) ? std::sqrt(1 - rho * rho) * r[a * n + t] : r[a * n + t] - rho * r[a * n + t - 1];
+            scores.col(t) += phi.row(a * n + t).transpose() * e / (1 - rho);
+        }
+    }
+    double numerator = 0.0, denominator = 0.0;
+    for (Eigen::Index j = 0; j < p; ++j) {
+        double sxy = 0.0, sxx = 0.0;
+        Eigen::Index count = 0;
+        for (Eigen::Index t = 1; t < n; ++t)
+            if (!starts(t)) {
+                sxy += scores(j, t) * scores(j, t - 1);
+                sxx += scores(j, t - 1) * scores(j, t - 1);
+                ++count;
+            }
+        const double rho = std::clamp(sxy / sxx, -0.97, 0.97);
+        double innovation = 0.0;
+        for (Eigen::Index t = 1; t < n; ++t)
+            if (!starts(t)) innovation += std::pow(scores(j, t) - rho * scores(j, t - 1), 2);
+        const double s4 = std::pow(innovation / static_cast<double>(count), 2);
+        numerator += 4 * rho * rho * s4 / (std::pow(1 - rho, 6) * std::pow(1 + rho, 2));
+        denominator += s4 / std::pow(1 - rho, 4);
+    }
+    lag = 1.1447 * std::cbrt(numerator / denominator * static_cast<double>(n));
+    Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(p, p);
+    for (Eigen::Index t = 0; t < n; ++t) {
+        meat += scores.col(t) * scores.col(t).transpose();
+        Eigen::Index start = t;
+        while (!starts(start)) --start;
+        for (Eigen::Index l = 1; l < lag && t - l >= start; ++l)
+            meat += (1 - static_cast<double>(l) / lag) *
+                    (scores.col(t) * scores.col(t - l).transpose() + scores.col(t - l) * scores.col(t).transpose());
+    }
+    meat *= static_cast<double>(2 * n) / static_cast<double>(2 * n - p);
+    const Eigen::MatrixXd bread = (phi.transpose() * phi).inverse();
+    return bread * meat * bread;
+}
+
+}  // namespace
+
+TEST_CASE("the Newey-West covariance from regressor blocks equals its direct double sum over lags", "[pmsm][linear_fit]") {
+    // Errors of a slow AR(1) (0.998) at twice the white noise: one AR(1) prewhitening leaves the slow part
+    // correlated, so the bandwidth spans many of the 5-sample blocks and crosses the 320-sample chunks
+    // that run in parallel.
+    RowLayout layout;
+    const Eigen::Index per_point = 700;
+    const Eigen::MatrixXd phi = operating_point_regressors(per_point, layout);
+    const Eigen::Index n = layout.samples;
+    Rng rng(21);
+    Eigen::VectorXd residual(2 * n);
+    double slow = 0.0;
+    for (Eigen::Index k = 0; k < 2 * n; ++k) {
+        slow = 0.998 * slow + std::sqrt(1 - 0.998 * 0.998) * rng.normal();
+        residual[k] = 0.01 * (2 * slow + rng.normal());
+    }
+    double lag = 0.0;
+    const Eigen::MatrixXd expected = direct_newey_west(phi, residual, layout, lag);
+
+    RegressorBlocks blocks;
+    blocks.columns = 4;
+    blocks.block_samples = 5;
+    blocks.fill = [&](Eigen::Index b, Eigen::Ref<Eigen::MatrixXd> rows) {
+        const Eigen::Index size = rows.rows() / 2;
+        rows.topRows(size) = phi.middleRows(b * 5, size);
+        rows.bottomRows(size) = phi.middleRows(n + b * 5, size);
+    };
+    const auto streamed = residual_uncertainty(blocks, residual, Eigen::Vector4d::Zero(), layout, CovarianceMethod::NeweyWest);
+    INFO("bandwidth " << lag);
+    CHECK(lag > 3.0 * 5);
+    CHECK(streamed.lag == Approx(lag).epsilon(1e-9));
+    for (Eigen::Index i = 0; i < 4; ++i)
+        for (Eigen::Index j = 0; j < 4; ++j) {
+            INFO("covariance (" << i << ", " << j << ")");
+            CHECK(streamed.covariance(i, j) == Approx(expected(i, j)).epsilon(1e-8).margin(1e-12 * std::abs(expected(i, i))));
+        }
+    // One thread gives the same numbers, bit for bit.
+    tbb::task_arena one(1);
+    const auto serial = one.execute([&] { return residual_uncertainty(blocks, residual, Eigen::Vector4d::Zero(), layout, CovarianceMethod::NeweyWest); });
+    CHECK(serial.covariance == streamed.covariance);
 }

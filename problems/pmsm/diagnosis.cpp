@@ -9,7 +9,9 @@
 #include <Eigen/Dense>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
@@ -54,20 +56,29 @@ std::string percent(double relative) { return fmt::format("{:+.1f} %", 100.0 * r
 NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
     const Eigen::Index n = data.size();
     const auto ranges = segment_ranges(data);
-    Eigen::VectorXd within = fit.residual;
+    Eigen::VectorXd storage;
+    Eigen::VectorXd within = residual_of(data, fit, storage);
+    storage.resize(0);
     for (int a = 0; a < 2; ++a)
         for (const auto& r : ranges) {
             auto block = within.segment(a * n + r.first, r.rows);
             block.array() -= block.mean();
         }
-    Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(2 * n, 2);
-    phi.col(0).head(n).setOnes();
-    phi.col(1).tail(n).setOnes();
+    // The long-run variance of each axis' mean: the regression on one indicator per axis.
+    RegressorBlocks indicators;
+    indicators.columns = 2;
+    indicators.fill = [](Eigen::Index, Eigen::Ref<Eigen::MatrixXd> rows) {
+        const Eigen::Index size = rows.rows() / 2;
+        rows.topRows(size).col(0).setOnes();
+        rows.topRows(size).col(1).setZero();
+        rows.bottomRows(size).col(0).setZero();
+        rows.bottomRows(size).col(1).setOnes();
+    };
     RowLayout layout;
     layout.samples = n;
     layout.axes = 2;
     if (data.has_segments()) layout.block = data.segment;
-    const auto u = parameter_uncertainty(phi, within, Eigen::Vector2d::Zero(), layout, CovarianceMethod::NeweyWest);
+    const auto u = residual_uncertainty(indicators, within, Eigen::Vector2d::Zero(), layout, CovarianceMethod::NeweyWest);
     NoiseEstimate noise;
     noise.model = fit.spec.text();
     for (int a = 0; a < 2; ++a) {
@@ -397,30 +408,55 @@ void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const N
             columns.push_back(j);
             names.push_back(fit.names[static_cast<std::size_t>(j)]);
         }
-    const Eigen::MatrixXd jacobian = prediction_jacobian(model, fit.values, columns);
-    const Eigen::Index n = fit.samples;
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-        std::vector<double> strength;
-        for (auto& s : segments) {
-            const auto jd = jacobian.col(static_cast<Eigen::Index>(c)).segment(s.first, s.rows);
-            const auto jq = jacobian.col(static_cast<Eigen::Index>(c)).segment(n + s.first, s.rows);
-            strength.push_back(std::sqrt((jd.squaredNorm() + jq.squaredNorm()) / static_cast<double>(s.rows)));
+    const auto& data = model.data();
+    const Eigen::Index n = fit.samples, p = static_cast<Eigen::Index>(columns.size());
+    Eigen::VectorXd storage;
+    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
+    // Per segment and parameter, of its Jacobian column: the squared norm on u_d and on u_q and the
+    // product with the residual (both axes), a block of rows at a time, summed in block order.
+    std::vector<Eigen::Index> starts;
+    for (const auto& s : segments) starts.push_back(s.first);
+    struct Share {
+        std::size_t segment = 0;
+        Eigen::ArrayXd dd, qq, dr;
+    };
+    std::vector<std::vector<Share>> shares(static_cast<std::size_t>(model.blocks()));
+    tbb::enumerable_thread_specific<Eigen::VectorXd> at(fit.values);
+    tbb::parallel_for(Eigen::Index{0}, model.blocks(), [&](Eigen::Index b) {
+        const Eigen::Index first = model.block_first(b), size = model.block_size(b);
+        Eigen::MatrixXd d(size, p), q(size, p);
+        block_jacobian(model, fit.values, columns, b, at.local(), d, q);
+        auto segment = static_cast<std::size_t>(std::upper_bound(starts.begin(), starts.end(), first) - starts.begin() - 1);
+        for (Eigen::Index k = 0; k < size; ++segment) {
+            const Eigen::Index end = segment + 1 < starts.size() ? std::min(size, starts[segment + 1] - first) : size;
+            const auto jd = d.middleRows(k, end - k), jq = q.middleRows(k, end - k);
+            Share share{segment, jd.colwise().squaredNorm().transpose().array(), jq.colwise().squaredNorm().transpose().array(),
+                        (jd.transpose() * residual.segment(first + k, end - k) + jq.transpose() * residual.segment(n + first + k, end - k)).array()};
+            shares[static_cast<std::size_t>(b)].push_back(std::move(share));
+            k = end;
         }
+    });
+    const auto count = segments.size();
+    std::vector<Eigen::ArrayXd> dd(count, Eigen::ArrayXd::Zero(p)), qq(count, Eigen::ArrayXd::Zero(p)), dr(count, Eigen::ArrayXd::Zero(p));
+    for (const auto& block : shares)
+        for (const auto& share : block) {
+            dd[share.segment] += share.dd;
+            qq[share.segment] += share.qq;
+            dr[share.segment] += share.dr;
+        }
+    for (Eigen::Index c = 0; c < p; ++c) {
+        std::vector<double> strength;
+        for (std::size_t k = 0; k < count; ++k) strength.push_back(std::sqrt((dd[k][c] + qq[k][c]) / static_cast<double>(segments[k].rows)));
         const double strongest = *std::max_element(strength.begin(), strength.end());
-        for (std::size_t k = 0; k < segments.size(); ++k) {
-            auto& s = segments[k];
-            const auto jd = jacobian.col(static_cast<Eigen::Index>(c)).segment(s.first, s.rows);
-            const auto jq = jacobian.col(static_cast<Eigen::Index>(c)).segment(n + s.first, s.rows);
-            const double norm2 = jd.squaredNorm() + jq.squaredNorm();
+        for (std::size_t k = 0; k < count; ++k) {
+            const double norm2 = dd[k][c] + qq[k][c];
             ApparentValue a;
             a.determined = strength[k] > 0.05 * strongest && norm2 > 0.0;
             if (a.determined) {
-                const double step = (jd.dot(fit.residual.segment(s.first, s.rows)) + jq.dot(fit.residual.segment(n + s.first, s.rows))) / norm2;
-                a.value = fit.values[columns[c]] + step;
-                a.standard_error = std::sqrt(std::pow(noise.long_run[0], 2) * jd.squaredNorm() +
-                                             std::pow(noise.long_run[1], 2) * jq.squaredNorm()) / norm2;
+                a.value = fit.values[columns[static_cast<std::size_t>(c)]] + dr[k][c] / norm2;
+                a.standard_error = std::sqrt(std::pow(noise.long_run[0], 2) * dd[k][c] + std::pow(noise.long_run[1], 2) * qq[k][c]) / norm2;
             }
-            s.apparent.push_back(a);
+            segments[k].apparent.push_back(a);
         }
     }
 }
@@ -483,6 +519,8 @@ std::vector<Drift> drifts_of(const std::vector<SegmentConditions>& segments, con
 LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise) {
     LackOfFit l;
     const Eigen::Index n = data.size();
+    Eigen::VectorXd storage;
+    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
     const auto ranges = segment_ranges(data);
     // Segment means: each has variance long_run^2 / n_s under noise alone.
     l.dof = 2 * static_cast<int>(ranges.size()) - static_cast<int>(fit.free_count());
@@ -490,7 +528,7 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
     double means_energy = 0.0;
     for (const auto& r : ranges)
         for (int a = 0; a < 2; ++a) {
-            const double mean = fit.residual.segment(a * n + r.first, r.rows).mean();
+            const double mean = residual.segment(a * n + r.first, r.rows).mean();
             l.statistic += static_cast<double>(r.rows) * std::pow(mean / noise.long_run[a], 2);
             means_energy += static_cast<double>(r.rows) * mean * mean;
         }
@@ -534,8 +572,8 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
                 }
                 share.harmonic_gram.selfadjointView<Eigen::Lower>().rankUpdate(x);
                 share.segment_harmonic.row(segment_of_row[static_cast<std::size_t>(t)]) += x.transpose();
-                share.harmonic_residual.col(0) += fit.residual[t] * x;
-                share.harmonic_residual.col(1) += fit.residual[n + t] * x;
+                share.harmonic_residual.col(0) += residual[t] * x;
+                share.harmonic_residual.col(1) += residual[n + t] * x;
             }
         });
         const Eigen::Index columns = s + 2 * orders;
@@ -544,7 +582,7 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
         for (Eigen::Index k = 0; k < s; ++k) {
             const auto& r = ranges[static_cast<std::size_t>(k)];
             gram(k, k) = static_cast<double>(r.rows);
-            for (int a = 0; a < 2; ++a) moment(k, a) = fit.residual.segment(a * n + r.first, r.rows).sum();
+            for (int a = 0; a < 2; ++a) moment(k, a) = residual.segment(a * n + r.first, r.rows).sum();
         }
         for (const auto& share : shares) {
             gram.bottomRightCorner(2 * orders, 2 * orders) += share.harmonic_gram.selfadjointView<Eigen::Lower>().toDenseMatrix();
@@ -584,7 +622,7 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseE
     l.structure = noise_energy > 0.0 ? structure_energy / noise_energy : 0.0;
     if (l.means_available && l.p_value < significance) {
         // Which operating condition the segment means follow most closely, per axis.
-        const auto segments = segment_residuals(data, fit.residual);
+        const auto& segments = fit.segments;
         for (int a = 0; a < 2; ++a) {
             std::vector<double> y;
             for (const auto& seg : segments) y.push_back(seg.mean[a]);
@@ -636,8 +674,7 @@ std::vector<Absorption> absorption_of(const Measurement& data, const ModelSpec& 
                                       const NoiseEstimate& noise) {
     std::vector<Absorption> out;
     const auto effect = make_effect(c.effect);
-    Eigen::VectorXd y(2 * data.size());
-    y << data.u_d, data.u_q;
+    const Eigen::Index n = data.size();
     const auto first = model.values.size();
     for (Eigen::Index j = first; j < c.fit.values.size(); ++j) {
         Absorption a;
@@ -652,9 +689,11 @@ std::vector<Absorption> absorption_of(const Measurement& data, const ModelSpec& 
         Eigen::VectorXd start = pinned_model->parameters_of(MotorParameters{});
         start.head(first) = model.values;
         const Eigen::VectorXd v = refine_parameters(*pinned_model, pinned, start);
-        const Eigen::VectorXd r = y - predict_stacked(*pinned_model, v);
+        Eigen::VectorXd r = predict_stacked(*pinned_model, v);
+        r.head(n) = data.u_d - r.head(n);
+        r.tail(n) = data.u_q - r.tail(n);
         for (int axis = 0; axis < 2; ++axis)
-            a.rss_change += (r.segment(axis * data.size(), data.size()).squaredNorm() - model.rss_axis(axis)) / std::pow(noise.long_run[axis], 2);
+            a.rss_change += (r.segment(axis * n, n).squaredNorm() - model.rss_axis(axis)) / std::pow(noise.long_run[axis], 2);
         for (int b = 0; b < 4; ++b) {
             a.base_shift[b] = v[b] / model.values[b] - 1.0;
             const double slope = (v[b] - model.values[b]) / a.typical;
@@ -711,13 +750,17 @@ std::vector<Addition> fit_additions(const Measurement& data, const ModelSpec& sp
                                     const std::vector<std::string>& effects, const FitOptions& options) {
     std::vector<Addition> out(effects.size());
     tbb::parallel_for(std::size_t{0}, effects.size(), [&](std::size_t k) {
-        const ModelSpec extended = spec.with(effects[k]);
-        const auto extended_model = make_model(extended, data);
-        Eigen::VectorXd start = extended_model->parameters_of(MotorParameters{});
-        start.head(fit.values.size()) = fit.values;
-        std::vector<Eigen::Index> search;
-        for (Eigen::Index j = fit.values.size(); j < start.size(); ++j) search.push_back(j);
-        out[k] = {effects[k], fit_model(data, extended, options, &start, search), static_cast<int>(search.size())};
+        // Isolated, so that a thread waiting inside this fit's parallel loops does not start another
+        // fit: at most one fit per thread holds its row-sized arrays at a time.
+        tbb::this_task_arena::isolate([&] {
+            const ModelSpec extended = spec.with(effects[k]);
+            const auto extended_model = make_model(extended, data);
+            Eigen::VectorXd start = extended_model->parameters_of(MotorParameters{});
+            start.head(fit.values.size()) = fit.values;
+            std::vector<Eigen::Index> search;
+            for (Eigen::Index j = fit.values.size(); j < start.size(); ++j) search.push_back(j);
+            out[k] = {effects[k], fit_model(data, extended, options, &start, search), static_cast<int>(search.size())};
+        });
     });
     return out;
 }
@@ -768,13 +811,17 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
                              const std::vector<std::string>& library, const std::vector<Candidate>& first_round,
                              const DiagnosisOptions& options) {
     SetSearch s;
-    s.steps.push_back({model, "", 0});
+    // The steps are compared by their sums of squares: no residual is copied along.
+    ModelFit start = model;
+    start.residual.resize(0);
+    s.steps.push_back({std::move(start), "", 0});
     // Fits after the first round are compared by their residuals and shown on the path without
     // intervals, so they are made without them. Each addition is polished jointly with the effects
     // already there: screening it with their values held (tried in 2026-11) lost the second effect of
     // 37 of 60 triples, because one missing effect biases the values the others take.
     FitOptions compared = options.fit;
     compared.intervals = false;
+    compared.keep_residual = false;
     std::vector<Addition> round;
     for (const auto& c : first_round) round.push_back({c.effect, c.fit, c.added_parameters});
     while (!round.empty() && static_cast<int>(s.steps.size()) - 1 < options.max_effects) {
@@ -845,7 +892,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
             const auto& names = reduced_model->parameter_names();
             Eigen::VectorXd start(static_cast<Eigen::Index>(names.size()));
             for (std::size_t j = 0; j < names.size(); ++j) start[static_cast<Eigen::Index>(j)] = current.values[current.index_of(names[j])];
-            ModelFit reduced_fit = polish_model(data, reduced, start, options.fit.covariance, false);
+            ModelFit reduced_fit = polish_model(data, reduced, start, compared);
             const int removed = static_cast<int>(current.free_count() - reduced_fit.free_count());
             // Evidence for keeping the effect, given all the others.
             const double keep_bic = -likelihood_ratio(reduced_fit, current, noise) + removed * log_n;
@@ -895,8 +942,13 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     if (data.temp_magnet) out.columns.push_back("temp_magnet");
 
     out.model = fit_model(data, spec, options.fit);
-    for (std::size_t k = 0; k < spec.effects.size(); ++k) out.steps.push_back(fit_model(data, spec.prefix(k), options.fit));
+    // Only the model keeps its residual; the rest are recomputed where needed (residual_of), so that
+    // a long log holds one residual, not one per fit.
+    FitOptions without_residual = options.fit;
+    without_residual.keep_residual = false;
+    for (std::size_t k = 0; k < spec.effects.size(); ++k) out.steps.push_back(fit_model(data, spec.prefix(k), without_residual));
     out.steps.push_back(out.model);
+    out.steps.back().residual.resize(0);
     const auto model = make_model(spec, data);
     const auto ranges = segment_ranges(data);
     out.mean_equations = 2 * static_cast<int>(ranges.size());
@@ -913,7 +965,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
         }
         library.push_back(entry->name);
     }
-    for (auto& a : fit_additions(data, spec, out.model, library, options.fit)) {
+    for (auto& a : fit_additions(data, spec, out.model, library, without_residual)) {
         Candidate c;
         c.effect = a.effect;
         c.added_parameters = a.added_parameters;

@@ -120,12 +120,15 @@ std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measuremen
     const Eigen::Index n = data.size();
     const bool before = d.steps.size() > 1;
     const auto& base = d.steps.front();
+    Eigen::VectorXd model_storage, base_storage;
+    const Eigen::VectorXd& model_residual = residual_of(data, d.model, model_storage);
+    const Eigen::VectorXd& base_residual = residual_of(data, base, base_storage);
     const fs::path file = plot.data("residual_time");
     std::ofstream out(file);
     out << "# x r_d r_q before_r_d before_r_q (V)\n";
     for (Eigen::Index k = 0; k < n; ++k)
-        out << fmt::format("{:.9g} {:.6g} {:.6g} {:.6g} {:.6g}\n", data.t ? (*data.t)[k] : static_cast<double>(k), d.model.residual[k],
-                           d.model.residual[n + k], base.residual[k], base.residual[n + k]);
+        out << fmt::format("{:.9g} {:.6g} {:.6g} {:.6g} {:.6g}\n", data.t ? (*data.t)[k] : static_cast<double>(k), model_residual[k],
+                           model_residual[n + k], base_residual[k], base_residual[n + k]);
     out.close();
     std::string body = fmt::format("set multiplot layout 2,1 title {} noenhanced\nset grid\nset key top right\n",
                                    gnuplot_quote("Residual (logged minus predicted voltage) through the record; dotted lines: segment changes"));
@@ -158,7 +161,9 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     Eigen::ArrayXd hits = Eigen::ArrayXd::Zero(count);
     // Deviations from each segment's mean: the operating points' offsets would otherwise hide what
     // repeats with the angle.
-    Eigen::VectorXd model_dev = d.model.residual, base_dev = base.residual;
+    Eigen::VectorXd storage;
+    Eigen::VectorXd model_dev = residual_of(data, d.model, storage);
+    Eigen::VectorXd base_dev = residual_of(data, base, storage);
     for (const auto& s : d.segments)
         for (int a = 0; a < 2; ++a) {
             model_dev.segment(a * n + s.first, s.rows).array() -= s.model.mean[a];

@@ -3,6 +3,7 @@
 // is: the exact optimum (unconstrained, and inside a box by active-set enumeration), an O(p^2)
 // evaluation of the objective for any candidate, and parameter uncertainty that can respect the
 // serial correlation of closed-loop data (docs/pmsm.md, "Uncertainty").
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,23 @@ ParameterUncertainty parameter_uncertainty(const Eigen::MatrixXd& phi, const Eig
 
 // The same from the residual y - phi estimate, for a caller that has it (no second copy of y).
 ParameterUncertainty residual_uncertainty(const Eigen::MatrixXd& phi, const Eigen::VectorXd& residual,
+                                          const Eigen::VectorXd& estimate, const RowLayout& layout,
+                                          CovarianceMethod method);
+
+// A regressor made a block of samples at a time and never held whole, for logs too long to store a
+// Jacobian: block b covers samples [b * block_samples, min(samples, (b + 1) * block_samples)) and
+// fill(b, rows) writes their rows on every axis, axis a's at rows.middleRows(a * size, size). fill is
+// called from several threads at once, and up to three times per block.
+struct RegressorBlocks {
+    Eigen::Index columns = 0;
+    Eigen::Index block_samples = 512;
+    std::function<void(Eigen::Index block, Eigen::Ref<Eigen::MatrixXd> rows)> fill;
+};
+
+// The same uncertainty from a regressor made in blocks: memory independent of the row count, the
+// same numbers on any number of threads. The Newey-West sum over lags is taken as one running
+// Bartlett-weighted sum per sample (two recursive sums), so its cost does not grow with the bandwidth.
+ParameterUncertainty residual_uncertainty(const RegressorBlocks& phi, const Eigen::VectorXd& residual,
                                           const Eigen::VectorXd& estimate, const RowLayout& layout,
                                           CovarianceMethod method);
 

@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <fmt/format.h>
 
@@ -368,8 +369,7 @@ Polished polish(const Projection& projection, const SteadyStateModel& model, Pro
     return {iteration, rss};
 }
 
-ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& values,
-                  CovarianceMethod covariance, bool intervals) {
+ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& values, const FitOptions& options) {
     ModelFit fit;
     fit.spec = spec;
     fit.names = model.parameter_names();
@@ -382,11 +382,12 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
     fit.range_upper = model.bounds().upper;
     const Eigen::Index n = model.data().size(), p = model.parameter_count();
     fit.samples = n;
-    fit.residual = predict_stacked(model, values);
-    fit.residual.head(n) = model.data().u_d - fit.residual.head(n);
-    fit.residual.tail(n) = model.data().u_q - fit.residual.tail(n);
-    fit.rms = axis_rms(fit.residual, n);
-    fit.segments = segment_residuals(model.data(), fit.residual);
+    Eigen::VectorXd residual = predict_stacked(model, values);
+    residual.head(n) = model.data().u_d - residual.head(n);
+    residual.tail(n) = model.data().u_q - residual.tail(n);
+    fit.axis_rss = {residual.head(n).squaredNorm(), residual.tail(n).squaredNorm()};
+    fit.rms = axis_rms(residual, n);
+    fit.segments = segment_residuals(model.data(), residual);
 
     std::vector<Eigen::Index> columns;
     for (Eigen::Index j = 0; j < p; ++j)
@@ -394,42 +395,46 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
     fit.lower = fit.upper = values;
     fit.standard_error = Eigen::VectorXd::Zero(p);
     for (const auto j : columns) fit.lower[j] = fit.upper[j] = fit.standard_error[j] = nan;
-    if (!intervals) return fit;
-    Eigen::MatrixXd jacobian = prediction_jacobian(model, values, columns);
-    // A parameter that moves the prediction by less than a nanovolt over its whole range (the phase
-    // of a harmonic whose amplitude is zero) is not determined at all; it is left out of the
-    // covariance, which would otherwise be singular for every parameter.
-    std::vector<Eigen::Index> kept;
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-        const Eigen::Index j = columns[c];
-        const double width = fit.range_upper[j] - fit.range_lower[j];
-        if (j < 4 || jacobian.col(static_cast<Eigen::Index>(c)).norm() * width > 1e-9 * std::sqrt(2.0 * static_cast<double>(n)))
-            kept.push_back(static_cast<Eigen::Index>(c));
-    }
-    if (static_cast<Eigen::Index>(kept.size()) < 2 * n && !kept.empty()) {
-        // The kept columns, moved into place (no second matrix as long as the data).
-        Eigen::MatrixXd phi = std::move(jacobian);
-        Eigen::VectorXd estimate(static_cast<Eigen::Index>(kept.size()));
-        for (Eigen::Index c = 0; c < estimate.size(); ++c) {
-            const Eigen::Index from = kept[static_cast<std::size_t>(c)];
-            if (from != c) phi.col(c) = phi.col(from);
-            estimate[c] = values[columns[static_cast<std::size_t>(from)]];
+    if (options.intervals && !columns.empty()) {
+        // A parameter that moves the prediction by less than a nanovolt over its whole range (the
+        // phase of a harmonic whose amplitude is zero) is not determined at all; it is left out of
+        // the covariance, which would otherwise be singular for every parameter.
+        const Eigen::MatrixXd gram = range_normal_equations(model, values, columns, {0}).gram.front();
+        std::vector<Eigen::Index> kept;
+        for (std::size_t c = 0; c < columns.size(); ++c) {
+            const Eigen::Index j = columns[c];
+            const double width = fit.range_upper[j] - fit.range_lower[j];
+            const auto k = static_cast<Eigen::Index>(c);
+            if (j < 4 || std::sqrt(gram(k, k)) * width > 1e-9 * std::sqrt(2.0 * static_cast<double>(n))) kept.push_back(j);
         }
-        phi.conservativeResize(Eigen::NoChange, estimate.size());
-        RowLayout layout;
-        layout.samples = n;
-        layout.axes = 2;
-        if (model.data().has_segments()) layout.block = model.data().segment;
-        // The linearised model around the estimate: its residual is the model's own.
-        fit.uncertainty = residual_uncertainty(phi, fit.residual, estimate, layout, covariance);
-        for (Eigen::Index c = 0; c < phi.cols(); ++c) {
-            const Eigen::Index j = columns[static_cast<std::size_t>(kept[static_cast<std::size_t>(c)])];
-            if (!std::isfinite(fit.uncertainty.standard_error[c])) continue;
-            fit.standard_error[j] = fit.uncertainty.standard_error[c];
-            fit.lower[j] = fit.uncertainty.lower[c];
-            fit.upper[j] = fit.uncertainty.upper[c];
+        if (!kept.empty() && static_cast<Eigen::Index>(kept.size()) < 2 * n) {
+            Eigen::VectorXd estimate(static_cast<Eigen::Index>(kept.size()));
+            for (Eigen::Index c = 0; c < estimate.size(); ++c) estimate[c] = values[kept[static_cast<std::size_t>(c)]];
+            // The model linearised around the estimate, a block of rows at a time: its residual is
+            // the model's own.
+            tbb::enumerable_thread_specific<Eigen::VectorXd> at(values);
+            RegressorBlocks jacobian;
+            jacobian.columns = estimate.size();
+            jacobian.block_samples = SteadyStateModel::block_rows;
+            jacobian.fill = [&](Eigen::Index b, Eigen::Ref<Eigen::MatrixXd> rows) {
+                const Eigen::Index size = rows.rows() / 2;
+                block_jacobian(model, values, kept, b, at.local(), rows.topRows(size), rows.bottomRows(size));
+            };
+            RowLayout layout;
+            layout.samples = n;
+            layout.axes = 2;
+            if (model.data().has_segments()) layout.block = model.data().segment;
+            fit.uncertainty = residual_uncertainty(jacobian, residual, estimate, layout, options.covariance);
+            for (Eigen::Index c = 0; c < estimate.size(); ++c) {
+                const Eigen::Index j = kept[static_cast<std::size_t>(c)];
+                if (!std::isfinite(fit.uncertainty.standard_error[c])) continue;
+                fit.standard_error[j] = fit.uncertainty.standard_error[c];
+                fit.lower[j] = fit.uncertainty.lower[c];
+                fit.upper[j] = fit.uncertainty.upper[c];
+            }
         }
     }
+    if (options.keep_residual) fit.residual = std::move(residual);
     return fit;
 }
 
@@ -441,13 +446,13 @@ std::vector<Eigen::Index> free_effect_parameters(const std::vector<bool>& free) 
 }
 
 ModelFit finish(const SteadyStateModel& model, const ModelSpec& spec, const Projection& projection,
-                Projection::Workspace& w, const std::vector<Eigen::Index>& moving, CovarianceMethod covariance, bool intervals,
+                Projection::Workspace& w, const std::vector<Eigen::Index>& moving, const FitOptions& options,
                 std::int64_t evaluations, std::string method) {
     const auto info = parameter_info(model);
     const int iterations = polish(projection, model, w, moving, info.periodic).iterations;
     // The base parameters once more by column-pivoting QR, for the reported values.
     w.values.head<4>() = projection.exact_base(w);
-    ModelFit fit = assemble(model, spec, w.values, covariance, intervals);
+    ModelFit fit = assemble(model, spec, w.values, options);
     fit.evaluations = evaluations;
     fit.polish_iterations = iterations;
     fit.method = std::move(method);
@@ -493,11 +498,7 @@ Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::Vect
     return out;
 }
 
-namespace {
-
-// The prediction Jacobian of the rows of block b in the listed columns, d rows into `d` and q rows
-// into `q`: base columns from the block's affine split (exact), effect columns by central
-// differences. Uses this thread's scratch of the model; `at` holds `values` and is restored.
+// Base columns from the block's affine split (exact), effect columns by central differences.
 void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values, const std::vector<Eigen::Index>& columns,
                     Eigen::Index b, Eigen::VectorXd& at, Eigen::Ref<Eigen::MatrixXd> d, Eigen::Ref<Eigen::MatrixXd> q) {
     auto& scratch = model.scratch();
@@ -527,8 +528,6 @@ void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values
         at[j] = values[j];
     }
 }
-
-}  // namespace
 
 Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                     const std::vector<Eigen::Index>& columns) {
@@ -673,7 +672,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
     const Projection projection(*model);
     auto w = projection.workspace(initial);
     if (searched.empty())
-        return finish(*model, spec, projection, w, free_effect_parameters(free), options.covariance, options.intervals, 0,
+        return finish(*model, spec, projection, w, free_effect_parameters(free), options, 0,
                       spec.effects.empty() || free_effect_parameters(free).empty() ? "linear least squares (exact)"
                                                                                    : "local refinement from the given start");
 
@@ -728,7 +727,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
             w.values = best;
         }
     }
-    return finish(*model, spec, projection, w, moving, options.covariance, options.intervals, record.evaluations, method);
+    return finish(*model, spec, projection, w, moving, options, record.evaluations, method);
 }
 
 Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& start) {
@@ -738,13 +737,22 @@ Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec
     return w.values;
 }
 
-ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start, CovarianceMethod covariance,
-                      bool intervals) {
+ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start, const FitOptions& options) {
     const auto model = make_model(spec, data);
     const Projection projection(*model);
     auto w = projection.workspace(start);
-    return finish(*model, spec, projection, w, free_effect_parameters(free_parameters(spec)), covariance, intervals, 0,
+    return finish(*model, spec, projection, w, free_effect_parameters(free_parameters(spec)), options, 0,
                   "local refinement from the given start");
+}
+
+const Eigen::VectorXd& residual_of(const Measurement& data, const ModelFit& fit, Eigen::VectorXd& storage) {
+    if (fit.residual.size() == 2 * data.size()) return fit.residual;
+    const auto model = make_model(fit.spec, data);
+    const Eigen::Index n = data.size();
+    storage = predict_stacked(*model, fit.values);
+    storage.head(n) = data.u_d - storage.head(n);
+    storage.tail(n) = data.u_q - storage.tail(n);
+    return storage;
 }
 
 }  // namespace mhb::pmsm

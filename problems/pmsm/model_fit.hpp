@@ -31,6 +31,9 @@ struct FitOptions {
     // Whether to compute the intervals (a Jacobian of the whole model and its covariance); off for
     // the many fits a search compares by their residual alone.
     bool intervals = true;
+    // Whether the fit keeps its residual (ModelFit::residual, two doubles per row); off for fits that
+    // are compared by their sums of squares and segment summaries, which are always kept.
+    bool keep_residual = true;
 };
 
 struct AxisRms {
@@ -55,7 +58,8 @@ struct ModelFit {
     Eigen::VectorXd range_lower, range_upper;  // Table 2's box for the base, each effect's plausible range
     std::vector<bool> periodic;          // angles whose range is a full turn
     Eigen::Index samples = 0;
-    Eigen::VectorXd residual;            // logged minus predicted: samples d rows, then samples q rows
+    Eigen::VectorXd residual;            // logged minus predicted: samples d rows, then samples q rows (empty unless kept)
+    Eigen::Vector2d axis_rss{0.0, 0.0};  // sum of squared residuals of u_d and u_q
     AxisRms rms;
     std::vector<SegmentResidual> segments;  // one per segment (one "all" when the data have none)
     ParameterUncertainty uncertainty;    // of the free parameters (in the order of `free`)
@@ -63,8 +67,8 @@ struct ModelFit {
     int polish_iterations = 0;           // Levenberg-Marquardt iterations
     std::string method;                  // how it was fitted, in words
 
-    double rss() const { return residual.squaredNorm(); }
-    double rss_axis(int axis) const { return residual.segment(axis * samples, samples).squaredNorm(); }
+    double rss() const { return axis_rss.sum(); }
+    double rss_axis(int axis) const { return axis_rss[axis]; }
     Eigen::Index free_count() const;
     Eigen::Index index_of(const std::string& name) const;  // -1 when absent
     // Free parameter at a bound of its range (a periodic angle never is).
@@ -75,15 +79,18 @@ struct ModelFit {
 // parameters) are searched by the optimiser; the other free effect parameters start at `start` (all
 // parameters; nullptr: the effects' defaults) and are only polished, as are the searched ones. An
 // empty `search` with a nullptr `start` searches every free effect parameter.
+// The fit's residual: its own when kept, else recomputed from its spec and values into `storage`.
+const Eigen::VectorXd& residual_of(const Measurement& data, const ModelFit& fit, Eigen::VectorXd& storage);
+
 // The rows the optimiser searches on (FitOptions::search_rows): all of them, or a sorted random subset.
 std::vector<Eigen::Index> search_subsample(Eigen::Index rows, const FitOptions& options);
 
 ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOptions& options,
                    const Eigen::VectorXd* start = nullptr, const std::vector<Eigen::Index>& search = {});
 
-// Levenberg-Marquardt from `start` only (no global search), e.g. to refit on part of the data.
-ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start,
-                      CovarianceMethod covariance = CovarianceMethod::NeweyWest, bool intervals = true);
+// Levenberg-Marquardt from `start` only (no global search), e.g. to refit on part of the data; of
+// `options`, the covariance, intervals and keep_residual apply.
+ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& start, const FitOptions& options = {});
 // The same, returning only the parameter values (no residual summaries, no intervals).
 Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& start);
 
@@ -95,6 +102,11 @@ Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::Vect
 // step of 1e-4 of the declared range for effect parameters.
 Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                     const std::vector<Eigen::Index>& columns);
+// The same for the rows of block b (model.block_first(b), model.block_size(b) of them), d rows into
+// `d` and q rows into `q`, for a caller that reduces the Jacobian a block at a time. Uses this thread's
+// scratch of the model; `at` must hold `values` and is left so.
+void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values, const std::vector<Eigen::Index>& columns,
+                    Eigen::Index b, Eigen::VectorXd& at, Eigen::Ref<Eigen::MatrixXd> d, Eigen::Ref<Eigen::MatrixXd> q);
 
 // The model linearised at `values` in the listed parameters (the prediction Jacobian J, columns as
 // prediction_jacobian) and reduced over each range of rows: J'J, J'r and r'r with r the residual at

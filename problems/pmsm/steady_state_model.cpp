@@ -1,9 +1,33 @@
 #include "problems/pmsm/steady_state_model.hpp"
 
+#include <map>
+#include <mutex>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 namespace mhb::pmsm {
+
+struct SteadyStateModel::AngleTable {
+    Eigen::ArrayXd cos, sin;
+
+    // The table of `theta` that a model alive now already uses, or a new one. Keyed by the column's
+    // storage: a model's data must not change or go while the model exists, so a live entry is
+    // always of the same numbers.
+    static std::shared_ptr<const AngleTable> of(const Eigen::VectorXd& theta) {
+        static std::mutex mutex;
+        static std::map<std::pair<const double*, Eigen::Index>, std::weak_ptr<const AngleTable>> tables;
+        const std::lock_guard lock(mutex);
+        std::erase_if(tables, [](const auto& entry) { return entry.second.expired(); });
+        auto& slot = tables[{theta.data(), theta.size()}];
+        if (auto table = slot.lock()) return table;
+        auto table = std::make_shared<AngleTable>();
+        table->cos = theta.array().cos();
+        table->sin = theta.array().sin();
+        slot = table;
+        return table;
+    }
+};
 
 Bounds base_parameter_bounds() {
     Bounds b;
@@ -33,10 +57,7 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
           b.affine[1] = make_affine(tail);
           return b;
       }) {
-    if (data_.theta_e) {
-        cos_theta_ = data_.theta_e->array().cos();
-        sin_theta_ = data_.theta_e->array().sin();
-    }
+    if (data_.theta_e) angle_ = AngleTable::of(*data_.theta_e);
     const Bounds base = base_parameter_bounds();
     std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
     for (const auto& e : effects_) {
@@ -93,8 +114,8 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
     s.omega = data_.omega_e.segment(first, n).array();
     if (data_.theta_e) {
         s.theta = data_.theta_e->segment(first, n).array();
-        s.cos_theta = cos_theta_.segment(first, n);
-        s.sin_theta = sin_theta_.segment(first, n);
+        s.cos_theta = angle_->cos.segment(first, n);
+        s.sin_theta = angle_->sin.segment(first, n);
     }
     if (data_.temp_winding) s.temp_winding = data_.temp_winding->segment(first, n).array();
     if (data_.temp_magnet) s.temp_magnet = data_.temp_magnet->segment(first, n).array();

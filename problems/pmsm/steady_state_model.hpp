@@ -96,14 +96,17 @@ private:
 
     std::optional<Measurement> owned_;
     const Measurement& data_;
-    Eigen::ArrayXd cos_theta_, sin_theta_;  // of the logged angle, once
+    // cos and sin of the logged angle, computed once and shared by the models of the same data that
+    // exist at the same time: a diagnosis makes tens of models of one log, several at once.
+    struct AngleTable;
+    std::shared_ptr<const AngleTable> angle_;
     std::vector<std::unique_ptr<Effect>> effects_;
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
     std::vector<std::string> names_;
     Bounds bounds_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
-    mutable tbb::enumerable_thread_specific<BlockScratch> scratch_;  // an effect after the sensors that does not state its base dependence
+    mutable tbb::enumerable_thread_specific<BlockScratch> scratch_;
 };
 
 }  // namespace mhb::pmsm
