@@ -90,6 +90,42 @@ TEST_CASE("the affine split of each library effect's prediction equals predictio
     for (int draw = 0; draw < 3; ++draw) check_split(*all, random_values(*all, rng));
 }
 
+TEST_CASE("the prediction is linear in each parameter an effect declares linear, beside every other library effect", "[pmsm][steady_state_model]") {
+    // Three points a fifth of the range apart on a line: the middle prediction is the mean of the outer
+    // two. A nonlinear parameter (the dead-time band, a harmonic's phase) fails this by far, which the
+    // last check shows, so the test can tell.
+    const Measurement& data = diagnosis_data({});
+    Rng rng(17);
+    auto curvature = [&](const SteadyStateModel& model, Eigen::Index j) {
+        Eigen::VectorXd v = random_values(model, rng);
+        const double lo = model.bounds().lower[j], hi = model.bounds().upper[j];
+        v[j] = lo + 0.3 * (hi - lo);
+        const Eigen::VectorXd a = predict_stacked(model, v);
+        v[j] = lo + 0.5 * (hi - lo);
+        const Eigen::VectorXd m = predict_stacked(model, v);
+        v[j] = lo + 0.7 * (hi - lo);
+        const Eigen::VectorXd c = predict_stacked(model, v);
+        return (a + c - 2.0 * m).cwiseAbs().maxCoeff() / std::max((c - a).cwiseAbs().maxCoeff(), 1e-300);
+    };
+    int linear = 0;
+    const auto& entries = EffectRegistry::instance().entries();
+    for (const auto* entry : entries)
+        for (const auto* other : entries) {
+            const std::string spec = entry == other ? "base+" + entry->name : "base+" + entry->name + "+" + other->name;
+            const auto model = make_model(parse_model_spec(spec), data);
+            for (Eigen::Index j = 4; j < model->parameter_count(); ++j) {
+                if (!model->linear_in(j)) continue;
+                INFO(spec << ": " << model->parameter_names()[static_cast<std::size_t>(j)]);
+                CHECK(curvature(*model, j) < 1e-9);
+                ++linear;
+            }
+        }
+    CHECK(linear > 0);
+    const auto deadtime = make_model(parse_model_spec("base+deadtime"), data);
+    CHECK_FALSE(deadtime->linear_in(5));
+    CHECK(curvature(*deadtime, 5) > 1e-3);
+}
+
 TEST_CASE("an effect that does not state its dependence on the base parameters is split as an affine map", "[pmsm][steady_state_model]") {
     std::vector<std::unique_ptr<Effect>> effects;
     effects.push_back(std::make_unique<UnstatedOffset>());

@@ -498,7 +498,9 @@ Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::Vect
     return out;
 }
 
-// Base columns from the block's affine split (exact), effect columns by central differences.
+// Base columns from the block's affine split (exact); effect columns in which the prediction is
+// linear by one more prediction against the split's own at `values` (exact too), the rest by central
+// differences.
 void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values, const std::vector<Eigen::Index>& columns,
                     Eigen::Index b, Eigen::VectorXd& at, Eigen::Ref<Eigen::MatrixXd> d, Eigen::Ref<Eigen::MatrixXd> q) {
     auto& scratch = model.scratch();
@@ -509,6 +511,11 @@ void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values
     const auto& lo = model.bounds().lower;
     const auto& hi = model.bounds().upper;
     model.predict_affine(values.data(), a, first);
+    // The prediction at `values`, made from the split when a linear column needs it, in the split's
+    // scratch.
+    auto& prediction_d = a.residual_d;
+    auto& prediction_q = a.residual_q;
+    bool have_prediction = false;
     for (std::size_t c = 0; c < columns.size(); ++c) {
         const Eigen::Index j = columns[c], k = static_cast<Eigen::Index>(c);
         if (j < 4) {
@@ -517,6 +524,20 @@ void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values
             continue;
         }
         const auto [down, up] = difference_points(values[j], lo[j], hi[j], false);
+        if (model.linear_in(j)) {
+            if (!have_prediction) {
+                prediction_d = a.offset_d + (a.phi_d.matrix() * values.head<4>()).array();
+                prediction_q = a.offset_q + (a.phi_q.matrix() * values.head<4>()).array();
+                have_prediction = true;
+            }
+            const double to = up != values[j] ? up : down;
+            at[j] = to;
+            model.predict(at.data(), s, first);
+            d.col(k) = ((s.u_d - prediction_d) / (to - values[j])).matrix();
+            q.col(k) = ((s.u_q - prediction_q) / (to - values[j])).matrix();
+            at[j] = values[j];
+            continue;
+        }
         at[j] = up;
         model.predict(at.data(), s, first);
         d.col(k) = s.u_d.matrix();
@@ -580,13 +601,13 @@ RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const
                 const Eigen::Index end =
                     range + 1 < starts.size() ? std::min(rows, starts[range + 1] - first) : rows;
                 const Eigen::Index count = end - k;
-                product.setZero();
-                auto lower = product.selfadjointView<Eigen::Lower>();
-                if (count == rows) lower.rankUpdate(augmented.transpose());
-                else {
-                    lower.rankUpdate(augmented.middleRows(k, count).transpose());
-                    lower.rankUpdate(augmented.middleRows(rows + k, count).transpose());
-                }
+                // The lower triangle as dot products of contiguous columns: for the few columns here
+                // a general rank update spends more time packing than multiplying.
+                for (Eigen::Index j = 0; j <= p; ++j)
+                    for (Eigen::Index i = j; i <= p; ++i) {
+                        const auto ci = augmented.col(i), cj = augmented.col(j);
+                        product(i, j) = ci.segment(k, count).dot(cj.segment(k, count)) + ci.segment(rows + k, count).dot(cj.segment(rows + k, count));
+                    }
                 Share share;
                 share.range = range;
                 share.gram = product.topLeftCorner(p, p).selfadjointView<Eigen::Lower>();

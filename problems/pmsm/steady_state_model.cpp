@@ -48,6 +48,7 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
       data_(owned_ ? *owned_ : *view),
       effects_(std::move(effects)),
       names_(base_parameter_names),
+      linear_(4, false),
       scratch_([this] {
           BlockScratch b;
           const Eigen::Index tail = data_.size() % block_rows;
@@ -63,8 +64,11 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
     for (const auto& e : effects_) {
         require_columns(*e, data_);
         offsets_.push_back(static_cast<Eigen::Index>(names_.size()));
+        const bool sensor = (e->model_stages() & (ModelStage::SensorCurrents | ModelStage::SensorAngle)) != 0;
+        std::size_t real = 0;
         for (const auto& spec : e->parameter_specs()) {
             if (spec.type != ParameterType::Real) continue;
+            linear_.push_back(!sensor && e->model_linear_in(real++));
             names_.push_back(e->name() + "." + spec.name);
             lower.push_back(spec.minimum);
             upper.push_back(spec.maximum);

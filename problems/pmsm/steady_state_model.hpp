@@ -51,6 +51,9 @@ public:
     Eigen::Index parameter_count() const { return static_cast<Eigen::Index>(names_.size()); }
     // "Rs", "Ld", "Lq", "psi_f", then "<effect>.<parameter>".
     const std::vector<std::string>& parameter_names() const { return names_; }
+    // Whether the prediction is linear in effect parameter j (Effect::model_linear_in); false for the
+    // base parameters, in which it is affine through the affine split instead.
+    bool linear_in(Eigen::Index j) const { return linear_[static_cast<std::size_t>(j)]; }
     // Table 2 for the base parameters, each effect parameter's plausible range for the rest.
     const Bounds& bounds() const { return bounds_; }
     // The base parameters of `motor` followed by the effects' own values: the parameters a
@@ -103,6 +106,7 @@ private:
     std::vector<std::unique_ptr<Effect>> effects_;
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
     std::vector<std::string> names_;
+    std::vector<bool> linear_;  // per parameter, see linear_in
     Bounds bounds_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;

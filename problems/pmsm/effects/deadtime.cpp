@@ -48,6 +48,7 @@ public:
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
+    bool model_linear_in(std::size_t k) const override { return k == 0; }  // the voltage, not the band
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
             const TerminalLoss loss(p[0], p[1]);

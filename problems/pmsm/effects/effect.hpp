@@ -134,6 +134,13 @@ public:
     // How model() at `stage` depends on the base parameters (see BaseDependence); stages before
     // Coefficients are never asked.
     virtual BaseDependence model_base_dependence(ModelStage /*stage*/) const { return BaseDependence::Affine; }
+    // Whether the prediction is linear in real parameter k (the others fixed), with any other library
+    // effects beside this one: what model() adds at its stage is linear in it, and no later stage of
+    // any effect is nonlinear in what earlier stages made (later stages use currents and the angle
+    // nonlinearly, never voltages, fluxes or coefficients). Then one prediction gives its Jacobian
+    // column exactly. Checked for every registered effect against every other one
+    // (tests/pmsm_steady_state_model_test.cpp); an effect acting in the sensor stages never is.
+    virtual bool model_linear_in(std::size_t /*k*/) const { return false; }
 
 private:
     std::string name_;

@@ -60,6 +60,7 @@ public:
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::FluxLinkage); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
+    bool model_linear_in(std::size_t) const override { return true; }
     void model(ModelStage, const double* k, ModelState& s) const override {
         for (Eigen::Index j = 0; j < s.psi_d.size(); ++j) {
             const Complex change = flux_change(k, s.i_d[j], s.i_q[j]);
