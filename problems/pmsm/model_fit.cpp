@@ -683,6 +683,30 @@ std::vector<Eigen::Index> search_subsample(Eigen::Index rows, const FitOptions& 
     return out;
 }
 
+namespace {
+
+// The listed rows of the columns `model` reads (no time, no segments, no temperature that none of its
+// effects uses), for a model of a subset: the subsets a long log is polished on stay small.
+Measurement model_rows(const SteadyStateModel& model, const std::vector<Eigen::Index>& rows) {
+    const Measurement& data = model.data();
+    Measurement out;
+    out.source = data.source;
+    out.i_d = data.i_d(rows);
+    out.i_q = data.i_q(rows);
+    out.u_d = data.u_d(rows);
+    out.u_q = data.u_q(rows);
+    out.omega_e = data.omega_e(rows);
+    if (data.theta_e) out.theta_e = Eigen::VectorXd((*data.theta_e)(rows));
+    for (const auto& effect : model.effects())
+        for (const auto& column : effect->model_columns()) {
+            if (column == "temp_winding" && data.temp_winding) out.temp_winding = Eigen::VectorXd((*data.temp_winding)(rows));
+            if (column == "temp_magnet" && data.temp_magnet) out.temp_magnet = Eigen::VectorXd((*data.temp_magnet)(rows));
+        }
+    return out;
+}
+
+}  // namespace
+
 ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOptions& options, const Eigen::VectorXd* start,
                    const std::vector<Eigen::Index>& search) {
     const auto model = make_model(spec, data);
@@ -701,7 +725,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
     std::unique_ptr<SteadyStateModel> sample_model;
     std::optional<Projection> sample_projection;
     if (static_cast<Eigen::Index>(rows.size()) < data.size()) {
-        sample_model = make_model(spec, select_rows(data, rows));
+        sample_model = make_model(spec, model_rows(*model, rows));
         sample_projection.emplace(*sample_model);
     }
     const EffectSearch problem(sample_projection ? *sample_projection : projection, *model, initial, searched);
@@ -739,7 +763,7 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
             best = start_rss < search_rss ? from_start : from_search;
             FitOptions level = options;
             for (level.search_rows = 10 * options.search_rows; level.search_rows < data.size(); level.search_rows *= 10) {
-                const auto subset = make_model(spec, select_rows(data, search_subsample(data.size(), level)));
+                const auto subset = make_model(spec, model_rows(*model, search_subsample(data.size(), level)));
                 const Projection subset_projection(*subset);
                 auto on_subset = subset_projection.workspace(best);
                 polish(subset_projection, *subset, on_subset, moving, periodic);
