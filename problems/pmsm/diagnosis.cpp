@@ -941,14 +941,13 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     if (data.temp_winding) out.columns.push_back("temp_winding");
     if (data.temp_magnet) out.columns.push_back("temp_magnet");
 
-    out.model = fit_model(data, spec, options.fit);
-    // Only the model keeps its residual; the rest are recomputed where needed (residual_of), so that
-    // a long log holds one residual, not one per fit.
+    // No fit keeps its residual: each is recomputed where it is needed (residual_of), so that a long
+    // log's diagnosis holds no row-sized array but the data while it searches.
     FitOptions without_residual = options.fit;
     without_residual.keep_residual = false;
+    out.model = fit_model(data, spec, without_residual);
     for (std::size_t k = 0; k < spec.effects.size(); ++k) out.steps.push_back(fit_model(data, spec.prefix(k), without_residual));
     out.steps.push_back(out.model);
-    out.steps.back().residual.resize(0);
     const auto model = make_model(spec, data);
     const auto ranges = segment_ranges(data);
     out.mean_equations = 2 * static_cast<int>(ranges.size());
