@@ -1,14 +1,18 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <fstream>
+#include <numbers>
 
 #include <Eigen/Dense>
+#include <fmt/format.h>
 
 #include "framework/input_error.hpp"
 #include "framework/optimizer.hpp"
 #include "framework/random.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/base_model_fit.hpp"
+#include "problems/pmsm/measurement.hpp"
 #include "problems/pmsm/simulation_profile.hpp"
 #include "tests/pmsm_fixture.hpp"
 #include "tests/temporary_directory.hpp"
@@ -293,4 +297,39 @@ TEST_CASE("the instances of one experiment read the measurement once and share i
     CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", path.string()}, {"settle", 0.1}}, context), InputError);
     // Outside an experiment each instance builds its own.
     CHECK_THROWS_AS(make_problem("pmsm_identification", {{"data", path.string()}}, ProblemContext{work, 0, nullptr}), InputError);
+}
+
+TEST_CASE("a column map in the problem's parameters reads a log with its own names and units", "[pmsm][identification]") {
+    const mhb::testing::TemporaryDirectory work_directory;
+    const auto& work = work_directory.path();
+    const auto path = simulated_file(work, "quiet_paper", quiet_paper_drive());
+    const Measurement m = read_measurement(path);
+    // The same log as a bench might write it: its own names, currents in mA, speed in rpm of a
+    // 16-pole-pair machine.
+    std::ofstream out(work / "bench.csv");
+    out << "time,op,Id,Iq,Vd,Vq,n\n";
+    for (Eigen::Index k = 0; k < m.size(); ++k)
+        out << fmt::format("{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", (*m.t)[k], m.segment_labels[static_cast<std::size_t>(m.segment[k])],
+                           1e3 * m.i_d[k], 1e3 * m.i_q[k], m.u_d[k], m.u_q[k], m.omega_e[k] / 16.0 * 60.0 / (2.0 * std::numbers::pi));
+    out.close();
+    {
+        std::ofstream map(work / "bench_columns.toml");
+        map << "pole_pairs = 16\n[columns]\nomega_e = \"n[rpm]\"\n";
+    }
+    const auto original = make_problem("pmsm_identification", {{"data", path.string()}});
+    const auto mapped = make_problem(
+        "pmsm_identification",
+        {{"data", std::string("bench.csv")}, {"columns", std::string("t=time,segment=op,i_d=Id[mA],i_q=Iq[mA],u_d=Vd,u_q=Vq")},
+         {"columns_file", std::string("bench_columns.toml")}},
+        {work, 0, nullptr});
+    const Eigen::VectorXd expected = *original->truth().reference_solution, got = *mapped->truth().reference_solution;
+    for (Eigen::Index j = 0; j < 4; ++j) CHECK(got[j] == Approx(expected[j]).epsilon(1e-9));
+    // Without the pole-pair count an rpm column cannot be read: refused, naming the column.
+    try {
+        make_problem("pmsm_identification", {{"data", std::string("bench.csv")}, {"columns", std::string("omega_e=n[rpm]")}}, {work, 0, nullptr});
+        FAIL("an rpm column without a pole-pair count was accepted");
+    } catch (const InputError& e) {
+        CHECK(std::string(e.what()).find("pole") != std::string::npos);
+        CHECK(e.field() == "omega_e");
+    }
 }

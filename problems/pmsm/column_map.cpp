@@ -109,7 +109,7 @@ void check_column_map(const ColumnMap& map) {
         if (source.unit == "rpm" && !map.pole_pairs)
             throw InputError(map.origin.at(column), 0, column,
                              "rpm is converted to electrical rad/s with the pole-pair count: give --pole-pairs N "
-                             "(or pole_pairs = N in the columns file)");
+                             "(or pole_pairs = N in the columns file or among the problem's parameters)");
     }
 }
 
@@ -174,10 +174,11 @@ ColumnMap merge_column_maps(ColumnMap base, const ColumnMap& overrides) {
     return base;
 }
 
-ColumnMap column_map_from_options(const std::string& columns, const std::string& columns_file, int pole_pairs) {
+ColumnMap column_map_from_options(const std::string& columns, const std::string& columns_file, int pole_pairs,
+                                  const std::string& origin, const std::string& option) {
     ColumnMap map;
     if (!columns_file.empty()) map = read_column_map_file(columns_file);
-    if (!columns.empty()) map = merge_column_maps(std::move(map), parse_column_map(columns, "command line", "--columns"));
+    if (!columns.empty()) map = merge_column_maps(std::move(map), parse_column_map(columns, origin, option));
     if (pole_pairs > 0) map.pole_pairs = pole_pairs;
     check_column_map(map);
     return map;

@@ -38,8 +38,10 @@ ColumnMap read_column_map_file(const std::filesystem::path& path);
 ColumnMap merge_column_maps(ColumnMap base, const ColumnMap& overrides);
 
 // The command-line options --columns, --columns-file and --pole-pairs combined; the map empty when
-// none was given. The command line wins over the file per column.
-ColumnMap column_map_from_options(const std::string& columns, const std::string& columns_file, int pole_pairs);
+// none was given. The command line wins over the file per column. `origin` and `option` name where
+// `columns` came from in refusals (an experiment's problem parameter, say).
+ColumnMap column_map_from_options(const std::string& columns, const std::string& columns_file, int pole_pairs,
+                                  const std::string& origin = "command line", const std::string& option = "--columns");
 
 // For each name present in a file, the mhbench column it feeds, or "" when none. A column the map
 // names is read from its source; any other column from the file's column of the same name, unless

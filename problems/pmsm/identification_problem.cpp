@@ -26,9 +26,10 @@ struct MeasurementStatistics {
     std::optional<Eigen::Vector4d> truth;  // from the simulation sidecar, when there is one
 };
 
-MeasurementStatistics read_statistics(const std::filesystem::path& path, double settle, Fitness fitness, CovarianceMethod method) {
+MeasurementStatistics read_statistics(const std::filesystem::path& path, const ColumnMap& map, double settle, Fitness fitness,
+                                      CovarianceMethod method) {
     MeasurementStatistics s;
-    Measurement all = read_measurement(path);
+    Measurement all = read_measurement(path, map);
     const auto rows = settled_rows(all, settle);
     if (rows.size() < 3)
         throw InputError(path.string(), 0, "settle",
@@ -50,10 +51,18 @@ public:
         const double settle = p.real("settle");
         const Fitness fitness = parse_fitness(p.text("fitness"));
         const CovarianceMethod method = p.text("uncertainty") == "white" ? CovarianceMethod::White : CovarianceMethod::NeweyWest;
-        auto build = [&] { return read_statistics(path_, settle, fitness, method); };
+        // A log's own column names and units, as `fit --columns` takes them.
+        const std::string& columns_file = p.text("columns_file");
+        const std::filesystem::path map_path =
+            columns_file.empty() || std::filesystem::path(columns_file).is_absolute() ? std::filesystem::path(columns_file)
+                                                                                       : context.base_directory / columns_file;
+        const ColumnMap map = column_map_from_options(p.text("columns"), map_path.string(), static_cast<int>(p.integer("pole_pairs")),
+                                                      "problem parameter", "columns");
+        auto build = [&] { return read_statistics(path_, map, settle, fitness, method); };
         if (context.shared) {
-            const std::string key = fmt::format("pmsm_identification|{}|{}|{}|{}", std::filesystem::absolute(path_).lexically_normal().string(),
-                                                settle, p.text("fitness"), p.text("uncertainty"));
+            const std::string key = fmt::format("pmsm_identification|{}|{}|{}|{}|{}|{}|{}",
+                                                std::filesystem::absolute(path_).lexically_normal().string(), settle, p.text("fitness"),
+                                                p.text("uncertainty"), p.text("columns"), map_path.string(), p.integer("pole_pairs"));
             statistics_ = context.shared->get<MeasurementStatistics>(key, build);
         } else {
             statistics_ = std::make_shared<const MeasurementStatistics>(build());
@@ -130,7 +139,10 @@ const bool registered = register_problem({
                            "mean squared dq-voltage error, or each axis divided by its LS residual variance"),
      ParameterSpec::real("settle", 0.0, 0.0, 1e6, "drop samples this long after each segment start (needs t, segment)", "s"),
      ParameterSpec::choice("uncertainty", "newey_west", {"newey_west", "white"},
-                           "covariance of the reported least-squares optimum (serially correlated or white errors)")},
+                           "covariance of the reported least-squares optimum (serially correlated or white errors)"),
+     ParameterSpec::text("columns", "", "the log's own column names and units, as fit --columns: i_d=Id[mA],omega_e=n[rpm],..."),
+     ParameterSpec::text("columns_file", "", "the same map as a TOML file (docs/data-format.md), relative to the experiment file"),
+     ParameterSpec::integer("pole_pairs", 0, 0, 1000, "pole-pair count for speeds in rpm (0: not given)")},
     [](const ParameterSet& p, const ProblemContext& c) { return std::make_unique<PmsmIdentification>(p, c); },
 });
 
