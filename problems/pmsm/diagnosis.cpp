@@ -57,8 +57,8 @@ NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
     const Eigen::Index n = data.size();
     const auto ranges = segment_ranges(data);
     Eigen::VectorXd storage;
-    Eigen::VectorXd within = residual_of(data, fit, storage);
-    storage.resize(0);
+    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
+    Eigen::VectorXd within = &residual == &storage ? std::move(storage) : residual;
     for (int a = 0; a < 2; ++a)
         for (const auto& r : ranges) {
             auto block = within.segment(a * n + r.first, r.rows);
