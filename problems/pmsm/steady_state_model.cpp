@@ -63,6 +63,10 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
     std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
     for (const auto& e : effects_) {
         require_columns(*e, data_);
+        for (const auto& column : e->model_columns()) {
+            reads_temp_winding_ = reads_temp_winding_ || column == "temp_winding";
+            reads_temp_magnet_ = reads_temp_magnet_ || column == "temp_magnet";
+        }
         offsets_.push_back(static_cast<Eigen::Index>(names_.size()));
         const bool sensor = (e->model_stages() & (ModelStage::SensorCurrents | ModelStage::SensorAngle)) != 0;
         std::size_t real = 0;
@@ -96,8 +100,8 @@ ModelState SteadyStateModel::make_state(Eigen::Index rows) const {
     s.resize(n);
     if (data_.theta_e)
         for (auto* a : {&s.theta, &s.cos_theta, &s.sin_theta}) a->resize(n);
-    if (data_.temp_winding) s.temp_winding.resize(n);
-    if (data_.temp_magnet) s.temp_magnet.resize(n);
+    if (reads_temp_winding_) s.temp_winding.resize(n);
+    if (reads_temp_magnet_) s.temp_magnet.resize(n);
     return s;
 }
 
@@ -121,8 +125,8 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
         s.cos_theta = angle_->cos.segment(first, n);
         s.sin_theta = angle_->sin.segment(first, n);
     }
-    if (data_.temp_winding) s.temp_winding = data_.temp_winding->segment(first, n).array();
-    if (data_.temp_magnet) s.temp_magnet = data_.temp_magnet->segment(first, n).array();
+    if (reads_temp_winding_) s.temp_winding = data_.temp_winding->segment(first, n).array();
+    if (reads_temp_magnet_) s.temp_magnet = data_.temp_magnet->segment(first, n).array();
 }
 
 void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const {

@@ -110,6 +110,9 @@ private:
     Bounds bounds_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
+    // Temperatures are copied into a block's state only for an effect that lists them
+    // (Effect::model_columns): each pass over a long log reads every column it loads from memory.
+    bool reads_temp_winding_ = false, reads_temp_magnet_ = false;
     mutable tbb::enumerable_thread_specific<BlockScratch> scratch_;
 };
 
