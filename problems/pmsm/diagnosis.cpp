@@ -53,6 +53,8 @@ std::string percent(double relative) { return fmt::format("{:+.1f} %", 100.0 * r
 
 // ---- noise ----
 
+// Takes its own copy of the fit's residual, or moves the one it recomputes: on a long log this
+// holds one row-sized array, not two.
 NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
     const Eigen::Index n = data.size();
     const auto ranges = segment_ranges(data);
@@ -400,7 +402,9 @@ std::vector<SegmentConditions> segment_conditions(const Measurement& data, const
 
 // Each free parameter refitted alone on each segment, the others held at the global fit: the value
 // that segment asks for. A drift of these with temperature, current or speed shows what is missing.
-void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const NoiseEstimate& noise, std::vector<SegmentConditions>& segments,
+// `residual` is the fit's (residual_of).
+void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const Eigen::VectorXd& residual, const NoiseEstimate& noise,
+                     std::vector<SegmentConditions>& segments,
                      std::vector<std::string>& names) {
     std::vector<Eigen::Index> columns;
     for (Eigen::Index j = 0; j < fit.values.size(); ++j)
@@ -410,8 +414,6 @@ void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const N
         }
     const auto& data = model.data();
     const Eigen::Index n = fit.samples, p = static_cast<Eigen::Index>(columns.size());
-    Eigen::VectorXd storage;
-    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
     // Per segment and parameter, of its Jacobian column: the squared norm on u_d and on u_q and the
     // product with the residual (both axes), a block of rows at a time, summed in block order.
     std::vector<Eigen::Index> starts;
@@ -516,11 +518,10 @@ std::vector<Drift> drifts_of(const std::vector<SegmentConditions>& segments, con
     return out;
 }
 
-LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise) {
+// `residual` is the fit's (residual_of).
+LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen::VectorXd& residual, const NoiseEstimate& noise) {
     LackOfFit l;
     const Eigen::Index n = data.size();
-    Eigen::VectorXd storage;
-    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
     const auto ranges = segment_ranges(data);
     // Segment means: each has variance long_run^2 / n_s under noise alone.
     l.dof = 2 * static_cast<int>(ranges.size()) - static_cast<int>(fit.free_count());
@@ -689,9 +690,7 @@ std::vector<Absorption> absorption_of(const Measurement& data, const ModelSpec& 
         Eigen::VectorXd start = pinned_model->parameters_of(MotorParameters{});
         start.head(first) = model.values;
         const Eigen::VectorXd v = refine_parameters(*pinned_model, pinned, start);
-        Eigen::VectorXd r = predict_stacked(*pinned_model, v);
-        r.head(n) = data.u_d - r.head(n);
-        r.tail(n) = data.u_q - r.tail(n);
+        const Eigen::VectorXd r = residual_stacked(*pinned_model, v);
         for (int axis = 0; axis < 2; ++axis)
             a.rss_change += (r.segment(axis * n, n).squaredNorm() - model.rss_axis(axis)) / std::pow(noise.long_run[axis], 2);
         for (int b = 0; b < 4; ++b) {
@@ -771,7 +770,8 @@ NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const Mod
     for (const auto* f : fits)
         if (f->rss() < best->rss()) best = f;
     NoiseEstimate noise = estimate_noise(data, *best);
-    const LackOfFit l = lack_of_fit(data, *best, noise);
+    Eigen::VectorXd storage;
+    const LackOfFit l = lack_of_fit(data, *best, residual_of(data, *best, storage), noise);
     if (l.means_available) noise.dispersion = std::max(1.0, l.statistic / l.dof);
     return noise;
 }
@@ -811,10 +811,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
                              const std::vector<std::string>& library, const std::vector<Candidate>& first_round,
                              const DiagnosisOptions& options) {
     SetSearch s;
-    // The steps are compared by their sums of squares: no residual is copied along.
-    ModelFit start = model;
-    start.residual.resize(0);
-    s.steps.push_back({std::move(start), "", 0});
+    s.steps.push_back({model, "", 0});
     // Fits after the first round are compared by their residuals and shown on the path without
     // intervals, so they are made without them. Each addition is polished jointly with the effects
     // already there: screening it with their values held (tried in 2026-11) lost the second effect of
@@ -987,11 +984,15 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     const ModelFit* reference = &search.steps.back().fit;
     for (const auto& c : out.candidates)
         if (c.fit.rss() < reference->rss()) reference = &c.fit;
-    out.noise = estimate_noise(data, *reference);
-    // Overdispersion: when even the best model tried leaves segment means that the noise cannot
-    // explain, every likelihood ratio is divided by that excess (Q / dof), as a quasi-likelihood does.
-    const LackOfFit reference_fit = lack_of_fit(data, *reference, out.noise);
-    if (reference_fit.means_available) out.noise.dispersion = std::max(1.0, reference_fit.statistic / reference_fit.dof);
+    {
+        out.noise = estimate_noise(data, *reference);
+        Eigen::VectorXd storage;
+        const Eigen::VectorXd& residual = residual_of(data, *reference, storage);
+        // Overdispersion: when even the best model tried leaves segment means that the noise cannot
+        // explain, every likelihood ratio is divided by that excess (Q / dof), as a quasi-likelihood does.
+        const LackOfFit reference_fit = lack_of_fit(data, *reference, residual, out.noise);
+        if (reference_fit.means_available) out.noise.dispersion = std::max(1.0, reference_fit.statistic / reference_fit.dof);
+    }
     const double log_n = std::log(std::max(out.noise.effective_samples, 2.0));
     // The excess residual: what the model leaves above the within-segment noise.
     const double floor_rss = static_cast<double>(data.size()) * out.noise.sigma.squaredNorm();
@@ -1053,8 +1054,17 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
 
     // The path, scored with the final noise estimate so that its steps compare with each other, and
     // as the search decided (without overdispersion: the noise floor at the end is the safeguard).
-    out.lack_of_fit = lack_of_fit(data, out.model, out.noise);
+    {
+        // One residual held at a time.
+        Eigen::VectorXd storage;
+        const Eigen::VectorXd& model_residual = residual_of(data, out.model, storage);
+        out.lack_of_fit = lack_of_fit(data, out.model, model_residual, out.noise);
+        apparent_values(*model, out.model, model_residual, out.noise, out.segments, out.apparent_names);
+    }
+    // Each step's structure left, kept for the findings below (step 0 is the model).
+    std::vector<LackOfFit> path_left{out.lack_of_fit};
     NoiseEstimate path_noise = out.noise;
+    Eigen::VectorXd step_storage;
     path_noise.dispersion = 1.0;
     for (std::size_t k = 0; k < search.steps.size(); ++k) {
         PathStep step;
@@ -1067,7 +1077,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
         check_base(step.fit, step.implausible);
         check_effects(step.fit, step.implausible);
         step.plausible = step.implausible.empty();
-        const LackOfFit left = lack_of_fit(data, step.fit, out.noise);
+        if (k > 0) path_left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, step_storage), out.noise));
+        const LackOfFit& left = path_left[k];
         step.at_noise_floor = !left.significant || left.structure < options.floor_tolerance;
         step.structure = left.significant ? left.structure : 0.0;
         if (left.significant) step.signature = left.signature;
@@ -1081,14 +1092,13 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.missing_effect_found = found || !out.tie.empty();
     if (found && out.tie.empty()) {
         out.winner = out.path[1].added.substr(1);
-        out.after_winner = lack_of_fit(data, out.path[1].fit, out.noise);
+        out.after_winner = path_left[1];
     }
     if (!out.tie.empty()) out.tie_experiments = revealing_experiments(design, proposals, search.tie_spec, search.tie_values, out.tie[0], out.tie[1]);
     // "Not in the library" only when no set of library effects reaches the noise floor with
     // plausible values while the model does not.
     out.not_in_library = out.lack_of_fit.significant && !found && out.tie.empty();
 
-    apparent_values(*model, out.model, out.noise, out.segments, out.apparent_names);
     out.drifts = drifts_of(out.segments, out.apparent_names);
 
     // ---- findings, in words ----
@@ -1173,7 +1183,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
         f.push_back(out.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
                                                 : "An experiment that would separate them: " + experiment_list(out.tie_experiments) + ".");
     } else if (out.not_in_library) {
-        const LackOfFit remaining = out.path.size() > 1 ? lack_of_fit(data, end.fit, out.noise) : out.lack_of_fit;
+        const LackOfFit& remaining = path_left.back();
         std::string text = "No set of library effects reaches the noise floor with plausible values: the missing effect is not in the library.";
         if (out.path.size() > 1)
             text += fmt::format(" The best set the library offers, {}, explains {:.0f} % of the excess residual{}; its effects may be real or may "

@@ -116,13 +116,17 @@ std::string segment_lines(const Diagnosis& d, const Measurement& data) {
     return out;
 }
 
-std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measurement& data) {
+// The model's and the base model's residuals (residual_of), which the two plots below share.
+struct PlottedResiduals {
+    Eigen::VectorXd model, base;
+};
+
+std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
     const Eigen::Index n = data.size();
     const bool before = d.steps.size() > 1;
     const auto& base = d.steps.front();
-    Eigen::VectorXd model_storage, base_storage;
-    const Eigen::VectorXd& model_residual = residual_of(data, d.model, model_storage);
-    const Eigen::VectorXd& base_residual = residual_of(data, base, base_storage);
+    const Eigen::VectorXd& model_residual = residuals.model;
+    const Eigen::VectorXd& base_residual = residuals.base;
     const fs::path file = plot.data("residual_time");
     std::ofstream out(file);
     out << "# x r_d r_q before_r_d before_r_q (V)\n";
@@ -148,7 +152,7 @@ std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measuremen
     return plot.render("residual_time", body, 1100, 750);
 }
 
-std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measurement& data) {
+std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
     if (!data.theta_e) return {};
     const Eigen::Index n = data.size();
     const bool before = d.steps.size() > 1;
@@ -161,9 +165,7 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     Eigen::ArrayXd hits = Eigen::ArrayXd::Zero(count);
     // Deviations from each segment's mean: the operating points' offsets would otherwise hide what
     // repeats with the angle.
-    Eigen::VectorXd storage;
-    Eigen::VectorXd model_dev = residual_of(data, d.model, storage);
-    Eigen::VectorXd base_dev = residual_of(data, base, storage);
+    Eigen::VectorXd model_dev = residuals.model, base_dev = residuals.base;
     for (const auto& s : d.segments)
         for (int a = 0; a < 2; ++a) {
             model_dev.segment(a * n + s.first, s.rows).array() -= s.model.mean[a];
@@ -548,8 +550,12 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     ReportOutcome outcome;
     fs::create_directories(directory);
     Plotter plot(directory, outcome);
-    const std::string time_png = residual_vs_time(plot, d, data);
-    const std::string angle_png = residual_vs_angle(plot, d, data);
+    PlottedResiduals residuals;
+    Eigen::VectorXd storage;
+    residuals.model = residual_of(data, d.model, storage);
+    residuals.base = residual_of(data, d.steps.front(), storage);
+    const std::string time_png = residual_vs_time(plot, d, data, residuals);
+    const std::string angle_png = residual_vs_angle(plot, d, data, residuals);
     const fs::path means = write_segment_means(plot, d);
     const std::string speed_png = means_against(plot, d, means, "residual_speed", "Segment-mean residual against speed", {{2, "omega_e (rad/s)"}});
     const std::string current_png =

@@ -382,9 +382,7 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
     fit.range_upper = model.bounds().upper;
     const Eigen::Index n = model.data().size(), p = model.parameter_count();
     fit.samples = n;
-    Eigen::VectorXd residual = predict_stacked(model, values);
-    residual.head(n) = model.data().u_d - residual.head(n);
-    residual.tail(n) = model.data().u_q - residual.tail(n);
+    Eigen::VectorXd residual = residual_stacked(model, values);
     fit.axis_rss = {residual.head(n).squaredNorm(), residual.tail(n).squaredNorm()};
     fit.rms = axis_rms(residual, n);
     fit.segments = segment_residuals(model.data(), residual);
@@ -495,6 +493,14 @@ Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::Vect
     const Eigen::Index n = model.data().size();
     Eigen::VectorXd out(2 * n);
     model.predict_rows(values.data(), out.data(), out.data() + n);
+    return out;
+}
+
+Eigen::VectorXd residual_stacked(const SteadyStateModel& model, const Eigen::VectorXd& values) {
+    const Eigen::Index n = model.data().size();
+    Eigen::VectorXd out = predict_stacked(model, values);
+    out.head(n) = model.data().u_d - out.head(n);
+    out.tail(n) = model.data().u_q - out.tail(n);
     return out;
 }
 
@@ -697,11 +703,8 @@ Measurement model_rows(const SteadyStateModel& model, const std::vector<Eigen::I
     out.u_q = data.u_q(rows);
     out.omega_e = data.omega_e(rows);
     if (data.theta_e) out.theta_e = Eigen::VectorXd((*data.theta_e)(rows));
-    for (const auto& effect : model.effects())
-        for (const auto& column : effect->model_columns()) {
-            if (column == "temp_winding" && data.temp_winding) out.temp_winding = Eigen::VectorXd((*data.temp_winding)(rows));
-            if (column == "temp_magnet" && data.temp_magnet) out.temp_magnet = Eigen::VectorXd((*data.temp_magnet)(rows));
-        }
+    if (model.reads_temp_winding()) out.temp_winding = Eigen::VectorXd((*data.temp_winding)(rows));
+    if (model.reads_temp_magnet()) out.temp_magnet = Eigen::VectorXd((*data.temp_magnet)(rows));
     return out;
 }
 
@@ -792,11 +795,7 @@ ModelFit polish_model(const Measurement& data, const ModelSpec& spec, const Eige
 
 const Eigen::VectorXd& residual_of(const Measurement& data, const ModelFit& fit, Eigen::VectorXd& storage) {
     if (fit.residual.size() == 2 * data.size()) return fit.residual;
-    const auto model = make_model(fit.spec, data);
-    const Eigen::Index n = data.size();
-    storage = predict_stacked(*model, fit.values);
-    storage.head(n) = data.u_d - storage.head(n);
-    storage.tail(n) = data.u_q - storage.tail(n);
+    storage = residual_stacked(*make_model(fit.spec, data), fit.values);
     return storage;
 }
 

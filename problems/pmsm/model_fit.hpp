@@ -96,6 +96,8 @@ Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec
 
 // Predicted logged voltages of `model` at `values`, stacked d then q.
 Eigen::VectorXd predict_stacked(const SteadyStateModel& model, const Eigen::VectorXd& values);
+// Logged minus predicted voltages of `model` at `values`, stacked d then q.
+Eigen::VectorXd residual_stacked(const SteadyStateModel& model, const Eigen::VectorXd& values);
 
 // d prediction / d parameter for the listed parameters (stacked d then q rows): exact for the base
 // parameters (the prediction is affine in them), central differences (one-sided at a bound) with a

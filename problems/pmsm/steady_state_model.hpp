@@ -54,6 +54,9 @@ public:
     // Whether the prediction is linear in effect parameter j (Effect::model_linear_in); false for the
     // base parameters, in which it is affine through the affine split instead.
     bool linear_in(Eigen::Index j) const { return linear_[static_cast<std::size_t>(j)]; }
+    // Whether a block's state carries this temperature: only when an effect lists it (model_columns).
+    bool reads_temp_winding() const { return reads_temp_winding_; }
+    bool reads_temp_magnet() const { return reads_temp_magnet_; }
     // Table 2 for the base parameters, each effect parameter's plausible range for the rest.
     const Bounds& bounds() const { return bounds_; }
     // The base parameters of `motor` followed by the effects' own values: the parameters a
