@@ -412,7 +412,6 @@ void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const E
             columns.push_back(j);
             names.push_back(fit.names[static_cast<std::size_t>(j)]);
         }
-    const auto& data = model.data();
     const Eigen::Index n = fit.samples, p = static_cast<Eigen::Index>(columns.size());
     // Per segment and parameter, of its Jacobian column: the squared norm on u_d and on u_q and the
     // product with the residual (both axes), a block of rows at a time, summed in block order.
