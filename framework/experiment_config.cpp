@@ -10,6 +10,7 @@
 #include <toml++/toml.h>
 
 #include "framework/input_error.hpp"
+#include "framework/plugin_loader.hpp"
 #include "framework/registry.hpp"
 
 namespace mhb {
@@ -189,17 +190,17 @@ std::vector<std::map<std::string, ParameterValue>> expand_grid(
     return out;
 }
 
-ExperimentSpec load_experiment(const fs::path& file) {
+ExperimentSpec load_experiment(const fs::path& file, PluginLoading plugins) {
     ConfigReader reader(file);
     std::error_code ec;
     if (fs::is_directory(file, ec)) reader.fail(0, "", "is a directory; expected an experiment TOML file");
     std::ifstream in(file, std::ios::binary);
     if (!in) reader.fail(0, "", std::string("cannot open the experiment file: ") + std::strerror(errno));
     const std::string text((std::istreambuf_iterator<char>(in)), {});
-    return parse_experiment(text, file);
+    return parse_experiment(text, file, plugins);
 }
 
-ExperimentSpec parse_experiment(const std::string& text, const fs::path& file) {
+ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, PluginLoading plugins) {
     ExperimentSpec spec;
     spec.file = file;
     ConfigReader reader(file);
@@ -212,20 +213,42 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file) {
     } catch (const toml::parse_error& e) {
         reader.fail(static_cast<long>(e.source().begin.line), "", std::string("TOML syntax: ") + std::string(e.description()));
     }
-    static const std::set<std::string> known{"name",  "description", "trials",   "seed",     "output",
-                                             "budget", "analysis",    "optimizer", "problem", "plots", "published"};
+    static const std::set<std::string> known{"name",   "description", "trials",    "seed",    "output", "budget",
+                                             "analysis", "optimizer",  "problem",   "plots",   "published", "plugins"};
     for (const auto& [k, v] : root)
         if (!known.count(std::string(k.str())))
             reader.fail(line_of(v), std::string(k.str()),
-                        "unknown key; expected one of name, description, trials, seed, output, plots, "
+                        "unknown key; expected one of name, description, trials, seed, output, plots, plugins, "
                         "[budget], [analysis], [[optimizer]], [[problem]], [[published]]");
+    const fs::path base = fs::absolute(file).parent_path();
+
+    // Before the names are resolved: a plugin may register the optimisers and problems named below.
+    if (const auto* list = root.get("plugins")) {
+        const auto* array = list->as_array();
+        if (!array) reader.fail(line_of(*list), "plugins", "expects a list of plugin library paths, e.g. [\"build/libmy_optimizer.so\"]");
+        for (std::size_t i = 0; i < array->size(); ++i) {
+            const auto& item = *array->get(i);
+            const std::string field = "plugins[" + std::to_string(i) + "]";
+            const auto* path = item.as_string();
+            if (!path || path->get().empty()) reader.fail(line_of(item), field, "expects a plugin library path (a non-empty string)");
+            // Relative to the config, like `output`: the experiment and its plugins travel together.
+            const fs::path library = (base / path->get()).lexically_normal();
+            spec.plugins.push_back(library);
+            if (plugins == PluginLoading::load) {
+                try {
+                    load_plugin(library);
+                } catch (const PluginLoadError& e) {
+                    reader.fail(line_of(item), field, e.what());
+                }
+            }
+        }
+    }
 
     spec.name = reader.text(root, "name", "name", 1, false, file.stem().string());
     spec.description = reader.text(root, "description", "description", 1, false);
     spec.trials = reader.integer(root, "trials", "trials", 1, 0, 1, true, max_trials,
                                  ": every trial is a line in results.jsonl and a row in memory for the tables");
     spec.seed = static_cast<std::uint64_t>(reader.integer(root, "seed", "seed", 0, 0, 1, true));
-    const fs::path base = fs::absolute(file).parent_path();
     spec.output = base / reader.text(root, "output", "output", 1, false, "../results/" + spec.name);
     spec.output = spec.output.lexically_normal();
     if (const auto* p = root.get("plots")) {

@@ -51,7 +51,12 @@ struct ExperimentSpec {
     std::vector<std::string> references;  // labels for pairwise columns (default: the baseline)
     bool plots = true;
     std::vector<PublishedResult> published;
+    std::vector<std::filesystem::path> plugins;  // `plugins`, relative paths resolved against the config
 };
+
+// Whether reading a config loads the plugin libraries its `plugins` list names. Loading runs their
+// code, so whatever only checks a config's text (the fuzzers) records the paths and loads nothing.
+enum class PluginLoading { load, record_only };
 
 // Upper limits of what a config may ask for, checked before any trial runs (the messages give them).
 inline constexpr std::int64_t max_trials = 100'000;
@@ -62,9 +67,10 @@ inline constexpr std::int64_t max_budget_evaluations = 1'000'000'000;
 inline constexpr std::int64_t max_grid_variants = 10'000;
 
 // Throws InputError (file, line, field) for anything malformed, unknown or out of range.
-ExperimentSpec load_experiment(const std::filesystem::path& file);
+ExperimentSpec load_experiment(const std::filesystem::path& file, PluginLoading plugins = PluginLoading::load);
 // The same from text already read; `file` names it in messages and anchors a relative `output`.
-ExperimentSpec parse_experiment(const std::string& text, const std::filesystem::path& file);
+ExperimentSpec parse_experiment(const std::string& text, const std::filesystem::path& file,
+                                PluginLoading plugins = PluginLoading::load);
 
 // Expands list-valued entries into the cartesian product, in declaration order.
 std::vector<std::map<std::string, ParameterValue>> expand_grid(

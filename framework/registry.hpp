@@ -6,7 +6,8 @@
 //       [](const ParameterSet& p) { return std::make_unique<Gwo>(p); }}); }
 //
 // The build compiles every .cpp under optimizers/ and problems/ into an object library that is linked
-// whole, so adding a plugin is adding one file; there is no central list to edit.
+// whole, so adding a plugin is adding one file; there is no central list to edit. A plugin built on
+// its own registers the same way when the program loads it (framework/plugin_loader.hpp).
 #include <algorithm>
 #include <cctype>
 #include <functional>
@@ -28,6 +29,21 @@ class UnknownPlugin : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
 };
+
+// Where the registrations running now come from: "built-in" while the program starts, the library's
+// path while framework/plugin_loader.cpp loads a plugin. A clash message names both origins.
+const std::string& registration_origin();
+void set_registration_origin(std::string origin);
+
+// A second registration under a name already taken: it is kept aside, not used.
+struct RegistrationClash {
+    std::string name;
+    std::string first_origin;   // the origin of the entry that keeps the name
+    std::string second_origin;  // the origin of the one refused
+    bool operator==(const RegistrationClash&) const = default;
+};
+// "the optimizer 'gwo' of /p/libx.so clashes with the built-in optimizer 'gwo'; rename it"
+std::string clash_message(const std::string& kind, const RegistrationClash& clash);
 
 template <class Factory>
 struct PluginEntry {
@@ -52,10 +68,11 @@ public:
     // main() with no way to say which file is at fault.
     bool add(Entry entry) {
         const std::string key = fold(entry.name);
-        if (entries_.count(key)) {
-            conflicts_.push_back(entry.name);
+        if (auto it = origins_.find(key); it != origins_.end()) {
+            conflicts_.push_back({entry.name, it->second, registration_origin()});
             return false;
         }
+        origins_.emplace(key, registration_origin());
         entries_.emplace(key, std::move(entry));
         return true;
     }
@@ -81,10 +98,19 @@ public:
         return out;
     }
 
-    const std::vector<std::string>& conflicts() const { return conflicts_; }
+    const std::vector<RegistrationClash>& conflicts() const { return conflicts_; }
+
+    // "built-in" or the path of the plugin library that registered `name`; empty when absent.
+    std::string origin(const std::string& name) const {
+        auto it = origins_.find(fold(name));
+        return it == origins_.end() ? std::string() : it->second;
+    }
 
     // Removes an entry (tests register temporary plugins).
-    void remove(const std::string& name) { entries_.erase(fold(name)); }
+    void remove(const std::string& name) {
+        entries_.erase(fold(name));
+        origins_.erase(fold(name));
+    }
 
 private:
     static std::string fold(const std::string& s) {
@@ -113,7 +139,8 @@ private:
         return a.size() - i < b.size() - j;
     }
     std::map<std::string, Entry> entries_;
-    std::vector<std::string> conflicts_;
+    std::map<std::string, std::string> origins_;
+    std::vector<RegistrationClash> conflicts_;
 };
 
 // Every registry that `mhbench list` shows and whose name conflicts it checks. Optimizers and
@@ -123,9 +150,14 @@ struct ListedRegistry {
     std::string kind;  // plural, e.g. "effects"
     std::function<std::vector<std::pair<std::string, std::string>>()> names_and_summaries;
     std::function<std::vector<std::vector<ParameterSpec>>()> parameters;  // in the same order
-    std::function<std::vector<std::string>()> conflicts;
+    std::function<std::vector<RegistrationClash>()> conflicts;
 };
 std::vector<ListedRegistry>& listed_registries();
+
+// Every clash in every listed registry and among the commands, as one message each.
+std::vector<std::string> registration_clashes();
+// A registry that `mhbench list` does not show (the commands) adds its clashes to the above.
+void add_clash_source(std::function<std::vector<std::string>()> source);
 
 template <class Factory>
 bool list_registry(const std::string& kind) {

@@ -31,7 +31,19 @@ TEST_CASE("a second registration under a taken name is reported, not silently re
     REQUIRE(local.add({"alpha", "first", {}, 1}));
     REQUIRE_FALSE(local.add({"Alpha", "second", {}, 2}));
     REQUIRE(local.find("alpha")->create == 1);
-    REQUIRE(local.conflicts() == std::vector<std::string>{"Alpha"});
+    REQUIRE(local.conflicts() == std::vector<RegistrationClash>{{"Alpha", "built-in", "built-in"}});
+}
+
+TEST_CASE("a clash names where each registration came from", "[registry]") {
+    Registry<int> local;
+    REQUIRE(local.add({"gwo", "the program's", {}, 1}));
+    set_registration_origin("/opt/plugins/libwolves.so");
+    const bool added = local.add({"GWO", "a plugin's", {}, 2});
+    set_registration_origin("built-in");
+    REQUIRE_FALSE(added);
+    REQUIRE(local.origin("gwo") == "built-in");
+    REQUIRE(clash_message("optimizer", local.conflicts().at(0)) ==
+            "the optimizer 'GWO' of /opt/plugins/libwolves.so clashes with the built-in optimizer 'GWO'; rename one of them");
 }
 
 TEST_CASE("registry lists names in natural order", "[registry]") {

@@ -14,7 +14,7 @@
 namespace mhb::fuzz {
 namespace {
 
-void parse_experiment_text(const std::string& text) { parse_experiment(text, "fuzz.toml"); }
+void parse_experiment_text(const std::string& text) { parse_experiment(text, "fuzz.toml", PluginLoading::record_only); }
 
 // Parsing only: a valid profile may ask for minutes of simulation, which would read as a hang.
 // The base directory is never touched while parsing (the plant reads a flux map when it is built).

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "framework/cli/commands.hpp"
-#include "framework/cli/model_command_options.hpp"
+#include "problems/pmsm/model_command_options.hpp"
 #include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
