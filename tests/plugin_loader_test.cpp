@@ -38,7 +38,7 @@ void build_against_installed(const fs::path& prefix, const fs::path& source, con
     const auto install = run({MHBENCH_CMAKE, "--install", MHBENCH_BUILD_DIR, "--prefix", prefix.string()}, logs / "install.log");
     INFO(install.output);
     REQUIRE(install.exit_code == 0);
-    const auto configure = run({MHBENCH_CMAKE, "-S", source.string(), "-B", build.string(), "-DCMAKE_BUILD_TYPE=Release",
+    const auto configure = run({MHBENCH_CMAKE, "-S", source.string(), "-B", build.string(), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
                                 "-DCMAKE_PREFIX_PATH=" + prefix.string(), "-DCMAKE_CXX_COMPILER=" MHBENCH_CXX_COMPILER},
                                logs / "configure.log");
     INFO(configure.output);
