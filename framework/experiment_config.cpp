@@ -202,6 +202,7 @@ ExperimentSpec load_experiment(const fs::path& file) {
 ExperimentSpec parse_experiment(const std::string& text, const fs::path& file) {
     ExperimentSpec spec;
     spec.file = file;
+    spec.text = text;
     ConfigReader reader(file);
     if (text.find_first_not_of(" \t\r\n") == std::string::npos)
         reader.fail(0, "", "empty file; an experiment needs trials, seed, [budget], [[optimizer]] and [[problem]] "
