@@ -9,6 +9,7 @@
 #include <fmt/ranges.h>
 
 #include "framework/file_output.hpp"
+#include "framework/html_report.hpp"
 #include "framework/input_error.hpp"
 #include "framework/plots.hpp"
 
@@ -630,7 +631,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     if (d.steps.size() > 1) md += "---|";
     md += "---|---|---|\n";
     for (const auto& s : d.segments) {
-        md += fmt::format("| {} | {:.2f} | {:.4f} | {:.4f} |", s.label, s.omega, s.i_d, s.i_q);
+        md += fmt::format("| {} | {:.2f} | {:.4f} | {:.4f} |", markdown_table_cell(s.label), s.omega, s.i_d, s.i_q);
         if (tw) md += fmt::format(" {:.1f} |", *s.temp_winding);
         if (tm) md += fmt::format(" {:.1f} |", *s.temp_magnet);
         if (d.steps.size() > 1) md += fmt::format(" {} |", mv(s.before.rms.total));
@@ -666,7 +667,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     for (std::size_t k = 0; k < d.apparent_names.size(); ++k) md += "---|";
     md += "\n";
     for (const auto& s : d.segments) {
-        md += "| " + s.label + " |";
+        md += "| " + markdown_table_cell(s.label) + " |";
         for (const auto& a : s.apparent) md += a.determined ? fmt::format(" {:.5g} ± {:.2g} |", a.value, a.standard_error) : std::string(" — |");
         md += "\n";
     }
