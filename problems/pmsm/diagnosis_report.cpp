@@ -157,7 +157,6 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     if (!data.theta_e) return {};
     const Eigen::Index n = data.size();
     const bool before = d.steps.size() > 1;
-    const auto& base = d.steps.front();
     const fs::path samples = plot.data("residual_angle"), bins = plot.data("residual_angle_bins");
     std::ofstream out(samples);
     out << "# theta_deg r_d r_q before_r_d before_r_q\n";
