@@ -1,12 +1,19 @@
-// The HTML report writer: one self-contained page that escapes every text, marks numbers for sorting
-// and inlines the plots.
+// report.html: one self-contained page per results directory. The writer escapes every text, marks
+// numbers for sorting and inlines the plots; headless Chromium (the Debian package, which CI installs)
+// then shows that a real report renders: not blank, with its tables and plots, and that a click on a
+// header sorts.
 #include <catch2/catch.hpp>
 
+#include <png.h>
+
 #include <filesystem>
+#include <set>
 
 #include "framework/html_report.hpp"
 #include "framework/input_error.hpp"
 #include "framework/plots.hpp"
+#include "framework/process.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -37,6 +44,93 @@ void check_self_contained(const std::string& html) {
     // One script: the page's own, inline.
     CHECK(occurrences(html, "<script") == 1);
     CHECK(occurrences(html, "<script>\n(function () {") == 1);
+}
+
+// ---- headless Chromium ----
+
+const fs::path chromium = "/usr/bin/chromium";
+
+// Fails (not skips) without the browser: CI installs it, so a missing one is a broken setup.
+void require_chromium() {
+    if (!fs::exists(chromium))
+        FAIL("headless Chromium is needed at " + chromium.string() +
+             " to check that the HTML reports render: install the Debian package chromium (.ci/install-dependencies does)");
+}
+
+// Runs Chromium on `page` with `mode` (--screenshot=FILE or --dump-dom), a fresh profile each time and
+// a time limit; its standard output goes to `output`, its chatter on standard error is ignored.
+void run_chromium(const fs::path& page, const std::string& mode, const fs::path& output) {
+    mhb::testing::TemporaryDirectory profile;
+    const auto run = run_program({"timeout", "--kill-after=5", "60", chromium.string(), "--headless", "--no-sandbox", "--disable-gpu",
+                                  "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
+                                  "--disable-sync", "--user-data-dir=" + profile.path().string(), "--window-size=1280,2400", mode,
+                                  "file://" + fs::absolute(page).string()},
+                                 std::nullopt, output, profile.path() / "chromium-stderr.txt");
+    INFO("chromium " << mode << " " << page << ": " << run.error << "\n" << mhb::testing::read_file(profile.path() / "chromium-stderr.txt"));
+    REQUIRE(run.started);
+    REQUIRE(run.exit_code == 0);  // 124: the time limit ran out
+}
+
+// The page as Chromium holds it once its script has run.
+std::string rendered_dom(const fs::path& page, const fs::path& scratch) {
+    const fs::path dom = scratch / (page.stem().string() + "-dom.html");
+    run_chromium(page, "--dump-dom", dom);
+    return mhb::testing::read_file(dom);
+}
+
+struct Rgb {
+    int r, g, b;
+};
+
+struct Screenshot {
+    unsigned width = 0, height = 0;
+    double ink = 0;         // share of pixels that are not white
+    std::size_t tones = 0;  // distinct colours
+    std::size_t plotted = 0;  // pixels in the colour of a plotted line (Screenshot::line), which no text or table uses
+};
+
+Screenshot screenshot(const fs::path& page, const fs::path& png, Rgb line) {
+    run_chromium(page, "--screenshot=" + png.string(), png.string() + ".log");
+    png_image image{};
+    image.version = PNG_IMAGE_VERSION;
+    INFO(png);
+    REQUIRE(png_image_begin_read_from_file(&image, png.c_str()) != 0);
+    image.format = PNG_FORMAT_RGB;
+    std::vector<png_byte> pixels(PNG_IMAGE_SIZE(image));
+    REQUIRE(png_image_finish_read(&image, nullptr, pixels.data(), 0, nullptr) != 0);
+    Screenshot s;
+    s.width = image.width;
+    s.height = image.height;
+    std::size_t ink = 0;
+    std::set<std::uint32_t> tones;
+    for (std::size_t i = 0; i + 2 < pixels.size(); i += 3) {
+        const int r = pixels[i], g = pixels[i + 1], b = pixels[i + 2];
+        if (std::min({r, g, b}) < 240) ++ink;
+        if (std::abs(r - line.r) <= 12 && std::abs(g - line.g) <= 12 && std::abs(b - line.b) <= 12) ++s.plotted;
+        tones.insert(static_cast<std::uint32_t>(r << 16 | g << 8 | b));
+    }
+    s.ink = static_cast<double>(ink) / static_cast<double>(pixels.size() / 3);
+    s.tones = tones.size();
+    return s;
+}
+
+// A report's screenshot at a laptop's width: the page is drawn, with text, tables and at least one plot.
+void check_drawn(const Screenshot& s) {
+    INFO("ink " << s.ink << ", " << s.tones << " colours, " << s.plotted << " pixels of a plotted line");
+    CHECK(s.width == 1280);
+    CHECK(s.height == 2400);
+    CHECK(s.ink > 0.03);
+    CHECK(s.tones > 200);
+    CHECK(s.plotted > 300);
+}
+
+// Every <table> and every <svg> the file holds is in the DOM, and the script made each table sortable.
+void check_dom(const std::string& html, const std::string& dom, std::size_t tables, std::size_t plots) {
+    CHECK(occurrences(html, "<table>") == tables);
+    CHECK(occurrences(dom, "<table") == tables);
+    CHECK(occurrences(dom, "<table class=\"sortable\">") == tables);
+    CHECK(occurrences(html, "<svg ") == plots);
+    CHECK(occurrences(dom, "<svg ") == plots);
 }
 
 }  // namespace
@@ -180,6 +274,73 @@ TEST_CASE("add_markdown reads the Markdown the reports are written in", "[html_r
     // An image whose SVG is missing is an error naming it, not a silently missing plot.
     HtmlReport broken;
     CHECK_THROWS_WITH(broken.add_markdown("![gone](gone.png)\n", dir.path()), Catch::Matchers::Contains("gone.svg"));
+}
+
+TEST_CASE("mhbench run writes report.html that renders in headless Chromium with its tables and plots", "[html_report][cli][browser]") {
+    require_chromium();
+    mhb::testing::TemporaryDirectory dir;
+    // Labels and a description with markup in them, as a user's config may have.
+    const auto config = dir.write("tiny.toml",
+                                  "name = \"tiny <report>\"\n"
+                                  "description = \"Two optimisers & two problems; <b>not bold</b>.\"\n"
+                                  "trials = 4\nseed = 7\noutput = \"out\"\n[budget]\nevaluations = 800\n"
+                                  "[[optimizer]]\nname = \"random_search\"\nlabel = \"rs <script>alert(1)</script>\"\n"
+                                  "[[optimizer]]\nname = \"de\"\n"
+                                  "[[problem]]\nname = \"F1\"\ndimension = 5\n[[problem]]\nname = \"bbob_f3\"\ndimension = 5\n");
+    const auto run = mhb::testing::run_mhbench({"run", config.string(), "--threads", "2"}, dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    CHECK(run.output.find("table.md, table.csv, report.html and 4 plots") != std::string::npos);
+    const fs::path report = dir.path() / "out" / "report.html";
+    REQUIRE(fs::exists(report));
+    const std::string html = mhb::testing::read_file(report);
+    check_self_contained(html);
+    CHECK(html.find("<title>tiny &lt;report&gt;</title>") != std::string::npos);
+    CHECK(html.find("rs &lt;script&gt;alert(1)&lt;/script&gt;") != std::string::npos);
+    CHECK(html.find("<script>alert(1)") == std::string::npos);
+    // Provenance, and the config as the run read it.
+    for (const char* label : {"<dt>mhbench</dt>", "<dt>commit</dt>", "<dt>date</dt>", "<dt>machine</dt>", "<dt>threads</dt><dd>2</dd>"})
+        CHECK(html.find(label) != std::string::npos);
+    CHECK(html.find("<summary><code>tiny.toml</code> as the run read it</summary>") != std::string::npos);
+    CHECK(html.find("label = &quot;rs &lt;script&gt;alert(1)&lt;/script&gt;&quot;") != std::string::npos);
+
+    // A table per problem and the Friedman ranks; a convergence plot and a box plot per problem.
+    const std::string dom = rendered_dom(report, dir.path());
+    check_dom(html, dom, 3, 4);
+    // de's median line: the second optimiser's colour in framework/plots.cpp.
+    check_drawn(screenshot(report, dir.path() / "run-report.png", {0xd9, 0x5f, 0x02}));
+
+    // `mhbench table` remakes it; without plots it says so.
+    const auto table = mhb::testing::run_mhbench({"table", (dir.path() / "out").string(), "--no-plots"}, dir.path() / "log2");
+    REQUIRE(table.exit_code == 0);
+    CHECK(table.output.find("table.md, table.csv, report.html.") != std::string::npos);
+    const std::string without = mhb::testing::read_file(report);
+    CHECK(occurrences(without, "<svg ") == 0);
+    CHECK(without.find("No plots: they were not drawn (--no-plots).") != std::string::npos);
+}
+
+TEST_CASE("a click on a header sorts numbers as numbers with missing values last, and a second click reverses", "[html_report][browser]") {
+    require_chromium();
+    mhb::testing::TemporaryDirectory dir;
+    HtmlReport page("sorting");
+    page.add_table({{"optimizer", "error"}, {{"b", "10"}, {"a", "9"}, {"d", "–"}, {"c", "1e-3"}, {"B", "-inf"}}});
+    // The test clicks as a reader would, then writes the row order where --dump-dom shows it.
+    const std::string clicks = R"(<script>
+var table = document.querySelector('table'), out = [];
+function order() { return Array.prototype.map.call(table.tBodies[0].rows, function (r) { return r.cells[0].textContent; }).join(','); }
+var headers = table.tHead.rows[0].cells;
+headers[1].click(); out.push(order());
+headers[1].click(); out.push(order());
+headers[0].click(); out.push(order());
+document.body.setAttribute('data-orders', out.join(' '));
+</script>
+)";
+    std::string html = page.html();
+    html.insert(html.rfind("</body>"), clicks);
+    const auto file = dir.write("sorting.html", html);
+    const std::string dom = rendered_dom(file, dir.path());
+    CHECK(dom.find("data-orders=\"B,c,a,b,d b,a,c,B,d a,b,B,c,d\"") != std::string::npos);
+    CHECK(dom.find("aria-sort=\"ascending\"") != std::string::npos);
 }
 
 TEST_CASE("markdown_table_cell keeps a label in its cell, and add_markdown reads it back whole", "[html_report]") {
