@@ -1,12 +1,13 @@
-// report.html: one self-contained page per results directory. The writer escapes every text, marks
-// numbers for sorting and inlines the plots; headless Chromium (the Debian package, which CI installs)
-// then shows that a real report renders: not blank, with its tables and plots, and that a click on a
-// header sorts.
+// report.html: one self-contained page per results directory and per diagnosis. The writer escapes
+// every text, marks numbers for sorting and inlines the plots; headless Chromium (the Debian package,
+// which CI installs) then shows that real reports render: not blank, with their tables and plots,
+// and that a click on a header sorts.
 #include <catch2/catch.hpp>
 
 #include <png.h>
 
 #include <filesystem>
+#include <regex>
 #include <set>
 
 #include "framework/html_report.hpp"
@@ -14,6 +15,7 @@
 #include "framework/plots.hpp"
 #include "framework/process.hpp"
 #include "tests/mhbench_cli.hpp"
+#include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -317,6 +319,39 @@ TEST_CASE("mhbench run writes report.html that renders in headless Chromium with
     const std::string without = mhb::testing::read_file(report);
     CHECK(occurrences(without, "<svg ") == 0);
     CHECK(without.find("No plots: they were not drawn (--no-plots).") != std::string::npos);
+}
+
+TEST_CASE("mhbench diagnose --report writes report.html that renders in headless Chromium with its tables and plots",
+          "[html_report][pmsm][cli][browser]") {
+    require_chromium();
+    mhb::testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "hidden.csv";
+    pmsm::write_measurement(csv, pmsm::testing::diagnosis_data({{"encoder_offset", {}}}));
+    const auto report = dir.path() / "report";
+    const auto run = pmsm::testing::run_mhbench("diagnose --data " + csv.string() + " --model base --threads 2 --report " + report.string(),
+                                               dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    const fs::path page = report / "report.html";
+    REQUIRE(fs::exists(page));
+    const std::string html = mhb::testing::read_file(page);
+    check_self_contained(html);
+    CHECK(html.find("<title>Diagnosis of `base` on `" + csv.string() + "`</title>") != std::string::npos);
+    CHECK(html.find("Missing effect: encoder_offset") != std::string::npos);
+    CHECK(html.find("<dt>threads</dt><dd>2</dd>") != std::string::npos);
+    CHECK(html.find("<dt>data</dt><dd>" + csv.string() + "</dd>") != std::string::npos);
+
+    // Every table and every image of report.md is on the page.
+    const std::string md = mhb::testing::read_file(report / "report.md");
+    const std::regex table_rule(R"(\n\|---)");
+    const auto tables = static_cast<std::size_t>(std::distance(std::sregex_iterator(md.begin(), md.end(), table_rule), std::sregex_iterator()));
+    const std::size_t plots = occurrences(md, "![");
+    CHECK(tables >= 6);
+    CHECK(plots == 9);
+    const std::string dom = rendered_dom(page, dir.path());
+    check_dom(html, dom, tables, plots);
+    // The fitted model's colour in problems/pmsm/diagnosis_report.cpp.
+    check_drawn(screenshot(page, dir.path() / "diagnosis-report.png", {0x1b, 0x6f, 0xb5}));
 }
 
 TEST_CASE("a click on a header sorts numbers as numbers with missing values last, and a second click reverses", "[html_report][browser]") {
