@@ -203,6 +203,7 @@ ExperimentSpec load_experiment(const fs::path& file, PluginLoading plugins) {
 ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, PluginLoading plugins) {
     ExperimentSpec spec;
     spec.file = file;
+    spec.text = text;
     ConfigReader reader(file);
     if (text.find_first_not_of(" \t\r\n") == std::string::npos)
         reader.fail(0, "", "empty file; an experiment needs trials, seed, [budget], [[optimizer]] and [[problem]] "

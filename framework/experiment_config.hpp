@@ -39,6 +39,7 @@ struct PublishedResult {
 
 struct ExperimentSpec {
     std::filesystem::path file;       // the TOML file
+    std::string text;                 // its content, recorded with the results
     std::string name;
     std::string description;
     std::int64_t trials = 0;

@@ -160,6 +160,7 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
     info.name = spec.name;
     info.description = spec.description;
     info.config_file = spec.file.string();
+    info.config_text = spec.text;
     info.trials = spec.trials;
     info.seed = spec.seed;
     info.budget = spec.budget;
@@ -219,9 +220,15 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
     std::set<std::tuple<std::string, std::string, std::int64_t>> done;
     const bool earlier_results = fs::file_size(results_path, ec) > 0 && !ec;
     const bool earlier_info = fs::exists(summary.output / "experiment.json", ec);
+    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     if (earlier_results || earlier_info) {
         if (options.resume) {
-            if (earlier_info) check_resumable(spec, read_experiment_info(summary.output), summary.output);
+            if (earlier_info) {
+                const auto earlier = read_experiment_info(summary.output);
+                check_resumable(spec, earlier, summary.output);
+                // The trials kept came from the earlier runs: their provenance stays beside this one's.
+                if (earlier_results) summary.info.runs = earlier.runs;
+            }
             if (earlier_results) {
                 drop_incomplete_last_line(results_path);
                 auto loaded = read_results(results_path);
@@ -234,6 +241,7 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
                                     " (use --resume to continue a run instead)");
         }
     }
+    summary.info.runs.push_back(current_provenance(threads));
     write_experiment_info(summary.output, summary.info);
     ResultsWriter writer(results_path);
 
@@ -259,7 +267,6 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
     std::exception_ptr write_error;
     // After a failed write (a full disk) the remaining trials are skipped: their records could not be kept.
     std::atomic<bool> writes_failed{false};
-    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(std::size_t{0}, tasks.size(), [&](std::size_t k) {

@@ -27,7 +27,8 @@ private:
 }  // namespace
 
 ProcessOutcome run_program(const std::vector<std::string>& argv, const std::optional<std::filesystem::path>& input,
-                           const std::optional<std::filesystem::path>& output) {
+                           const std::optional<std::filesystem::path>& output,
+                           const std::optional<std::filesystem::path>& error_output) {
     ProcessOutcome outcome;
     if (argv.empty()) {
         outcome.error = "no program given";
@@ -41,10 +42,12 @@ ProcessOutcome run_program(const std::vector<std::string>& argv, const std::opti
     // The paths are kept alive here: posix_spawn_file_actions_addopen may keep the pointer.
     const std::string in_path = input ? input->string() : std::string("/dev/null");
     const std::string out_path = output ? output->string() : std::string("/dev/null");
+    const std::string error_path = error_output ? error_output->string() : std::string();
     FileActions actions;
     posix_spawn_file_actions_addopen(actions.get(), 0, in_path.c_str(), O_RDONLY, 0);
     posix_spawn_file_actions_addopen(actions.get(), 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(actions.get(), 1, 2);
+    if (error_output) posix_spawn_file_actions_addopen(actions.get(), 2, error_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    else posix_spawn_file_actions_adddup2(actions.get(), 1, 2);
 
     pid_t pid = 0;
     const int spawn_error = posix_spawnp(&pid, argv[0].c_str(), actions.get(), nullptr, args.data(), environ);

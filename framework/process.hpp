@@ -16,8 +16,11 @@ struct ProcessOutcome {
 };
 
 // Runs argv[0] (searched on PATH) with `argv`, standard input read from `input` (or /dev/null),
-// standard output and error both written to `output` (or discarded), and waits for it.
+// standard output written to `output` (or discarded), and waits for it. Standard error goes to
+// `error_output` when given, else wherever standard output goes: a program that prints its result
+// (a browser's DOM) and chatters on standard error can keep the two apart.
 ProcessOutcome run_program(const std::vector<std::string>& argv, const std::optional<std::filesystem::path>& input,
-                           const std::optional<std::filesystem::path>& output);
+                           const std::optional<std::filesystem::path>& output,
+                           const std::optional<std::filesystem::path>& error_output = std::nullopt);
 
 }  // namespace mhb

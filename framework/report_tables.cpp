@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "framework/file_output.hpp"
+#include "framework/html_report.hpp"
 #include "framework/input_error.hpp"
 #include "framework/statistics.hpp"
 
@@ -152,7 +153,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                              " | std | median | best | worst | evaluations |";
         std::string rule = "|---|---|---|---|---|---|---|---|";
         for (const auto& ref : info.references) {
-            header += fmt::format(" p vs {} | A12 vs {} |", ref, ref);
+            header += fmt::format(" p vs {0} | A12 vs {0} |", markdown_table_cell(ref));
             rule += "---|---|";
         }
         header += " time/trial (s) |";
@@ -163,7 +164,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
             const auto& s = g.error;
             std::string runs = std::to_string(g.runs);
             if (g.failed) runs += fmt::format(" ({} failed)", g.failed);
-            md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |", info.optimizers[o].label, runs,
+            md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |", markdown_table_cell(info.optimizers[o].label), runs,
                               s.n ? num(s.mean) : "–", s.n ? num(s.sd) : "–", s.n ? num(s.median) : "–",
                               s.n ? num(s.min) : "–", s.n ? num(s.max) : "–", num(g.mean_evaluations));
             for (const auto& v : g.versus)
@@ -178,14 +179,14 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                               prob.truth.true_parameters ? "the true values" : prob.truth.reference_label);
             std::string h = "| |", r2 = "|---|";
             for (const auto& n : prob.parameter_names) {
-                h += fmt::format(" {} mean | {} err % | {} std |", n, n, n);
+                h += fmt::format(" {0} mean | {0} err % | {0} std |", markdown_table_cell(n));
                 r2 += "---|---|---|";
             }
             h += " fitness mean | fitness std | time total (s) |";
             r2 += "---|---|---|";
             md += h + "\n" + r2 + "\n";
             auto fixed_row = [&](const std::string& label, const Vector& v, std::optional<double> fitness) {
-                std::string row = "| " + label + " |";
+                std::string row = "| " + markdown_table_cell(label) + " |";
                 for (Eigen::Index j = 0; j < v.size(); ++j) {
                     row += fmt::format(" {} | {:.3g} | |", num(v[j]), error_percent(v[j], target, j));
                 }
@@ -199,7 +200,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
             for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                 const auto& g = summaries[p][o];
                 if (!g.runs) continue;
-                std::string row = "| " + info.optimizers[o].label + " |";
+                std::string row = "| " + markdown_table_cell(info.optimizers[o].label) + " |";
                 for (int j = 0; j < prob.dimension; ++j) {
                     const auto& s = g.parameters[static_cast<std::size_t>(j)];
                     row += fmt::format(" {} | {:.3g} | {} |", num(s.mean), error_percent(s.mean, target, j), num(s.sd));
@@ -209,7 +210,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
             }
             for (const auto& pub : info.published) {
                 if (pub.problem != prob.label) continue;
-                std::string row = "| " + pub.label + " |";
+                std::string row = "| " + markdown_table_cell(pub.label) + " |";
                 for (int j = 0; j < prob.dimension; ++j) {
                     const auto& n = prob.parameter_names[static_cast<std::size_t>(j)];
                     auto m = pub.mean.find(n);
@@ -267,7 +268,7 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
             md += fmt::format("## Friedman mean ranks over {} problems (by mean final fitness; 1 = best)\n\n", scores.size());
             md += "| Optimizer | mean rank |\n|---|---|\n";
             for (std::size_t o = 0; o < info.optimizers.size(); ++o)
-                md += fmt::format("| {} | {:.2f} |\n", info.optimizers[o].label, f.mean_ranks[o]);
+                md += fmt::format("| {} | {:.2f} |\n", markdown_table_cell(info.optimizers[o].label), f.mean_ranks[o]);
             md += fmt::format("\nFriedman chi-square = {:.3f}, {} degrees of freedom, p = {}.\n\n", f.chi_square,
                               info.optimizers.size() - 1, pval(f.p));
         }

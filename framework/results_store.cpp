@@ -101,6 +101,24 @@ std::vector<PublishedResult> published_from(const json& j) {
     return out;
 }
 
+json provenance_json(const Provenance& p) {
+    return {{"mhbench_version", p.version}, {"commit", p.commit},
+            {"started", p.date},            {"host", p.host},
+            {"system", p.system},           {"hardware_threads", p.hardware_threads},
+            {"threads", p.threads}};
+}
+Provenance provenance_from(const json& j) {
+    Provenance p;
+    p.version = j.at("mhbench_version");
+    p.commit = j.at("commit");
+    p.date = j.at("started");
+    p.host = j.at("host");
+    p.system = j.at("system");
+    p.hardware_threads = j.at("hardware_threads");
+    p.threads = j.at("threads");
+    return p;
+}
+
 }  // namespace
 
 json to_json(const TrialRecord& r) {
@@ -166,9 +184,13 @@ json to_json(const ExperimentInfo& info) {
                             {"lower", p.lower},
                             {"upper", p.upper}});
     }
+    json runs = json::array();
+    for (const auto& r : info.runs) runs.push_back(provenance_json(r));
     return {{"name", info.name},
             {"description", info.description},
             {"config_file", info.config_file},
+            {"config_text", info.config_text},
+            {"runs", runs},
             {"trials", info.trials},
             {"seed", info.seed},
             {"budget", {{"iterations", info.budget.max_iterations}, {"evaluations", info.budget.max_evaluations}}},
@@ -185,6 +207,9 @@ ExperimentInfo experiment_from_json(const json& j) {
     info.name = j.at("name");
     info.description = j.value("description", "");
     info.config_file = j.value("config_file", "");
+    info.config_text = j.value("config_text", "");
+    if (j.contains("runs"))
+        for (const auto& r : j["runs"]) info.runs.push_back(provenance_from(r));
     info.trials = j.at("trials");
     info.seed = j.at("seed");
     info.budget.max_iterations = j.at("budget").at("iterations");

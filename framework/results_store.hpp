@@ -13,6 +13,7 @@
 
 #include "framework/experiment_config.hpp"
 #include "framework/problem.hpp"
+#include "framework/provenance.hpp"
 #include "framework/trial.hpp"
 
 namespace mhb {
@@ -47,6 +48,12 @@ struct ExperimentInfo {
     std::vector<std::string> references;
     bool plots = true;
     std::vector<PublishedResult> published;
+    // The config file's text as the run read it, so the results show what made them even after the
+    // file has changed. Empty in files from before it was recorded.
+    std::string config_text;
+    // One entry per `mhbench run` that wrote trials here (a `--resume` adds one). Empty in files from
+    // before provenance was recorded.
+    std::vector<Provenance> runs;
 };
 
 nlohmann::json to_json(const TrialRecord& record);

@@ -105,6 +105,43 @@ TEST_CASE("every earlier run in the directory is kept, with its experiment.json,
     REQUIRE(read_results(dir.path() / "out" / "results.jsonl").records.size() == 12);
 }
 
+TEST_CASE("experiment.json records the config's text and each run's provenance, and a resume adds its own", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const std::string text = config(two_optimizers, two_problems, 2);
+    const auto spec = load_experiment(dir.write("e.toml", text));
+    RunOptions o;
+    o.output = dir.path() / "out";
+    o.threads = 2;
+    run_experiment(spec, o);
+    const auto first = read_experiment_info(dir.path() / "out");
+    REQUIRE(first.config_text == text);
+    REQUIRE(first.runs.size() == 1);
+    const auto& run = first.runs.front();
+    REQUIRE(run.threads == 2);
+    REQUIRE_FALSE(run.version.empty());
+    REQUIRE_FALSE(run.commit.empty());
+    REQUIRE_FALSE(run.host.empty());
+    REQUIRE(run.hardware_threads > 0);
+    // ISO 8601 in UTC, to the second.
+    REQUIRE(run.date.size() == 20);
+    REQUIRE(run.date[10] == 'T');
+    REQUIRE(run.date.back() == 'Z');
+
+    o.resume = true;
+    o.threads = 1;
+    run_experiment(load_experiment(dir.write("e.toml", config(two_optimizers, two_problems, 3))), o);
+    const auto resumed = read_experiment_info(dir.path() / "out");
+    REQUIRE(resumed.runs.size() == 2);
+    REQUIRE(resumed.runs[0].date == run.date);
+    REQUIRE(resumed.runs[0].threads == 2);
+    REQUIRE(resumed.runs[1].threads == 1);
+
+    // A fresh run (the earlier one moved to previous/) starts its own list.
+    o.resume = false;
+    run_experiment(spec, o);
+    REQUIRE(read_experiment_info(dir.path() / "out").runs.size() == 1);
+}
+
 TEST_CASE("a plugin that throws or returns NaN fails only its own trials", "[experiment_runner]") {
     testing::TemporaryDirectory dir;
     const std::string optimizers =

@@ -37,3 +37,15 @@ TEST_CASE("run_program says so when the program does not exist", "[process]") {
     REQUIRE_FALSE(run.started);
     REQUIRE_THAT(run.error, Catch::Contains("mhbench-no-such-program"));
 }
+
+TEST_CASE("run_program keeps standard error apart when given a file for it", "[process]") {
+    testing::TemporaryDirectory dir;
+    const auto out = dir.path() / "out.txt", err = dir.path() / "err.txt";
+    auto run = run_program({"sh", "-c", "echo result; echo chatter >&2"}, std::nullopt, out, err);
+    REQUIRE(run.exit_code == 0);
+    REQUIRE(testing::read_file(out) == "result\n");
+    REQUIRE(testing::read_file(err) == "chatter\n");
+    // Without one, both go to the output, as before.
+    run = run_program({"sh", "-c", "echo result; echo chatter >&2"}, std::nullopt, out);
+    REQUIRE(testing::read_file(out) == "result\nchatter\n");
+}

@@ -85,3 +85,50 @@ TEST_CASE("the CSV table holds the statistics of the trials", "[report_tables]")
     REQUIRE_THAT(md, Catch::Contains("| A | 2 (1 failed) |"));
     REQUIRE_THAT(md, Catch::Contains("| truth | 2 | 0 |"));
 }
+
+TEST_CASE("a label with a bar or a line break keeps its Markdown table row whole", "[report_tables]") {
+    ExperimentInfo info;
+    info.name = "t";
+    info.trials = 1;
+    PluginVariant a, b;
+    a.label = "A|x";
+    b.label = "B\nsecond line";
+    info.optimizers = {a, b};
+    ProblemInfo p;
+    p.label = "P";
+    p.dimension = 1;
+    p.parameter_names = {"x1"};
+    info.problems = {p, p};
+    info.problems[1].label = "Q";
+    info.baseline = a.label;
+    info.references = {a.label};
+    const Vector x = Vector::Zero(1);
+    std::vector<TrialRecord> records{trial("A|x", 0, 2.0, x), trial("B\nsecond line", 0, 1.0, x)};
+    for (auto r : std::vector<TrialRecord>(records)) {
+        r.problem = "Q";
+        records.push_back(r);
+    }
+    const auto md = markdown_report(info, records);
+    // Each table line has as many unescaped bars as the header line above it.
+    auto bars = [](const std::string& line) {
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < line.size(); ++i) n += line[i] == '|' && (i == 0 || line[i - 1] != '\\');
+        return n;
+    };
+    std::stringstream lines(md);
+    std::string line;
+    std::size_t header = 0, rows = 0;
+    while (std::getline(lines, line)) {
+        if (line.empty() || line[0] != '|') {
+            header = 0;
+            continue;
+        }
+        if (header == 0) header = bars(line);
+        else ++rows;
+        CHECK(bars(line) == header);
+    }
+    CHECK(rows >= 3 * 3);  // two problems' tables and the Friedman ranks, each a rule and two rows
+    CHECK(md.find("| A\\|x |") != std::string::npos);
+    CHECK(md.find("| B second line |") != std::string::npos);
+    CHECK(md.find("p vs A\\|x") != std::string::npos);
+}

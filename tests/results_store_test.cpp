@@ -46,3 +46,24 @@ TEST_CASE("a corrupt line in the middle of a results file is bad input", "[resul
         REQUIRE(e.line() == 2);
     }
 }
+
+TEST_CASE("experiment.json from before the config text and provenance were recorded still reads", "[results_store]") {
+    ExperimentInfo info;
+    info.name = "old";
+    info.trials = 3;
+    info.config_text = "name = \"old\"\n";
+    info.runs.push_back(current_provenance(4));
+    auto j = to_json(info);
+    const auto back = experiment_from_json(j);
+    REQUIRE(back.config_text == info.config_text);
+    REQUIRE(back.runs.size() == 1);
+    REQUIRE(back.runs[0].threads == 4);
+    REQUIRE(back.runs[0].date == info.runs[0].date);
+    REQUIRE(back.runs[0].system == info.runs[0].system);
+    j.erase("config_text");
+    j.erase("runs");
+    const auto old = experiment_from_json(j);
+    REQUIRE(old.name == "old");
+    REQUIRE(old.config_text.empty());
+    REQUIRE(old.runs.empty());
+}

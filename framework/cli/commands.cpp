@@ -14,6 +14,7 @@
 #include "framework/closest_name.hpp"
 #include "framework/input_error.hpp"
 #include "framework/plugin_loader.hpp"
+#include "framework/provenance.hpp"
 #include "framework/registry.hpp"
 
 namespace mhb::cli {
@@ -88,8 +89,9 @@ int run(int argc, char** argv) {
     }
     CLI::App app{"mhbench: benchmark metaheuristic optimisers and identify physical models from measurements"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", fmt::format("mhbench {} (plugin interface version {})", MHBENCH_VERSION,
-                                                   plugin_interface_version()));
+    const auto build = current_provenance(0);
+    app.set_version_flag("--version", fmt::format("mhbench {} (commit {}, plugin interface version {})", build.version,
+                                                   build.commit, plugin_interface_version()));
     std::vector<std::string> plugins;  // loaded above; declared so that --help lists it
     app.add_option("--plugin", plugins,
                    "load a plugin library (optimizers, problems, effects, commands) built against the installed "

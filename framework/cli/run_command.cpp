@@ -7,6 +7,7 @@
 
 #include "framework/cli/commands.hpp"
 #include "framework/cli/option_ranges.hpp"
+#include "framework/experiment_report.hpp"
 #include "framework/experiment_runner.hpp"
 #include "framework/plots.hpp"
 #include "framework/report_tables.hpp"
@@ -16,22 +17,29 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Tables and plots from whatever the directory holds; returns the Markdown report.
+// Tables, plots and report.html from whatever the directory holds; returns the Markdown report.
 std::string publish(const fs::path& directory, bool plots, bool quiet) {
     const auto info = read_experiment_info(directory);
     auto loaded = read_results(directory / "results.jsonl");
     for (const auto& note : loaded.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
     const std::string report = write_tables(directory, info, loaded.records);
-    std::vector<fs::path> images;
-    if (plots && info.plots) {
+    ExperimentPlots drawn;
+    if (!plots) {
+        drawn.absent_because = "No plots: they were not drawn (--no-plots).";
+    } else if (!info.plots) {
+        drawn.absent_because = "No plots: the experiment's config switches them off (plots = false).";
+    } else {
         const auto outcome = write_plots(directory, info, loaded.records);
         for (const auto& note : outcome.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
-        images = outcome.images;
+        drawn.images = outcome.images;
+        drawn.absent_because = outcome.notes.empty() ? "No plots: no trial has finished successfully."
+                                                     : "No plots: " + outcome.notes.front() + ".";
     }
+    write_experiment_report(directory, info, report, drawn);
     if (!quiet) {
         fmt::print("{}\n", report);
-        fmt::print("Wrote {}/table.md, table.csv", directory.string());
-        if (!images.empty()) fmt::print(" and {} plots (PNG + SVG)", images.size());
+        fmt::print("Wrote {}/table.md, table.csv, report.html", directory.string());
+        if (!drawn.images.empty()) fmt::print(" and {} plots (PNG + SVG)", drawn.images.size());
         fmt::print(".\n");
     }
     return report;

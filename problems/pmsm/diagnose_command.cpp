@@ -25,7 +25,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     auto o = std::make_shared<DiagnoseCommandOptions>();
     add_model_options(cmd, *o, "model to diagnose, e.g. base or base+deadtime (docs/effects.md)",
                       "write the diagnosis as JSON here");
-    cmd->add_option("--report", o->report, "write report.md with PNG plots into this directory");
+    cmd->add_option("--report", o->report, "write report.md with PNG plots, and report.html (one page, plots inline), into this directory");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
@@ -47,7 +47,8 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         }
         if (!o->report.empty()) {
             const auto outcome = pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data, data_reading_options(*o));
-            fmt::print("{}report: {} ({} plots)\n", o->json.empty() ? "\n" : "", outcome.markdown.string(), outcome.images.size());
+            fmt::print("{}report: {} and {} ({} plots)\n", o->json.empty() ? "\n" : "", outcome.markdown.string(),
+                       outcome.html.string(), outcome.images.size());
             for (const auto& note : outcome.notes) fmt::print("note: {}\n", note);
         }
         return exit_ok;

@@ -7,10 +7,14 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "framework/file_output.hpp"
+#include "framework/html_report.hpp"
 #include "framework/input_error.hpp"
 #include "framework/plots.hpp"
+#include "framework/provenance.hpp"
 
 namespace mhb::pmsm {
 namespace fs = std::filesystem;
@@ -224,11 +228,13 @@ fs::path write_segment_means(Plotter& plot, const Diagnosis& d) {
 std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& file, const std::string& name, const std::string& title,
                           const std::vector<std::pair<int, std::string>>& variables) {
     const bool before = d.steps.size() > 1;
-    const auto columns = static_cast<int>(variables.size());
-    std::string body = fmt::format("set multiplot layout 2,{} title {} noenhanced\nset grid\nset key top left font ',9'\nset offsets graph 0.05, graph 0.05, 0, 0\n",
-                                   columns, gnuplot_quote(title));
-    for (int a = 0; a < 2; ++a)
-        for (const auto& [column, label] : variables) {
+    // One row per variable, u_d beside u_q: two panels a row stay readable on a laptop's screen, where
+    // three side by side (current: i_d, i_q, |i|) would have to shrink to two thirds.
+    const auto rows = static_cast<int>(variables.size());
+    std::string body = fmt::format("set multiplot layout {},2 title {} noenhanced\nset grid\nset key top left font ',9'\nset offsets graph 0.05, graph 0.05, 0, 0\n",
+                                   rows, gnuplot_quote(title));
+    for (const auto& [column, label] : variables)
+        for (int a = 0; a < 2; ++a) {
             body += fmt::format("set xlabel {} noenhanced\nset ylabel {} noenhanced\n", gnuplot_quote(label),
                                 gnuplot_quote(std::string("mean ") + axis_name(a) + " residual (V)"));
             std::string plots = fmt::format("0 with lines lc rgb '#444444' notitle, ");
@@ -240,7 +246,7 @@ std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& fil
             body += "plot " + plots + "\n";
         }
     body += "unset multiplot\n";
-    return plot.render(name, body, 520 * columns + 80, 760);
+    return plot.render(name, body, 1100, 360 * rows + 60);
 }
 
 std::string segment_rms_bars(Plotter& plot, const Diagnosis& d) {
@@ -629,7 +635,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     if (d.steps.size() > 1) md += "---|";
     md += "---|---|---|\n";
     for (const auto& s : d.segments) {
-        md += fmt::format("| {} | {:.2f} | {:.4f} | {:.4f} |", s.label, s.omega, s.i_d, s.i_q);
+        md += fmt::format("| {} | {:.2f} | {:.4f} | {:.4f} |", markdown_table_cell(s.label), s.omega, s.i_d, s.i_q);
         if (tw) md += fmt::format(" {:.1f} |", *s.temp_winding);
         if (tm) md += fmt::format(" {:.1f} |", *s.temp_magnet);
         if (d.steps.size() > 1) md += fmt::format(" {} |", mv(s.before.rms.total));
@@ -665,7 +671,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     for (std::size_t k = 0; k < d.apparent_names.size(); ++k) md += "---|";
     md += "\n";
     for (const auto& s : d.segments) {
-        md += "| " + s.label + " |";
+        md += "| " + markdown_table_cell(s.label) + " |";
         for (const auto& a : s.apparent) md += a.determined ? fmt::format(" {:.5g} ± {:.2g} |", a.value, a.standard_error) : std::string(" — |");
         md += "\n";
     }
@@ -746,6 +752,19 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     md += "How these verdicts are reached: docs/effects.md, \"How diagnose decides\".\n";
     replace_file(directory / "report.md", md);
     outcome.markdown = directory / "report.md";
+
+    // The page shows report.md as it is, so the two cannot drift apart.
+    HtmlReport page;
+    // The diagnosis ran under the --threads cap (a global_control alive while it runs), if any.
+    const auto threads = std::min(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+                                  static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+    for (const auto& [label, value] : provenance_lines(current_provenance(static_cast<int>(threads)))) page.add_provenance(label, value);
+    page.add_provenance("data", data_path + data_options);
+    page.add_provenance("model", m.spec.text());
+    page.add_markdown(md, directory);
+    if (outcome.images.empty() && !outcome.notes.empty()) page.add_paragraph("No plots: " + outcome.notes.front() + ".");
+    outcome.html = directory / "report.html";
+    page.write(outcome.html);
     return outcome;
 }
 

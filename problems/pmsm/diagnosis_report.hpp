@@ -1,7 +1,8 @@
 #pragma once
 // What `mhbench fit` and `mhbench diagnose` print and write: console text, JSON for programs
 // (the contract in docs/effects.md), and the diagnosis report for people: one directory with
-// report.md and PNG plots (SVG beside each, the gnuplot scripts and data in plot-data/).
+// report.md and PNG plots (SVG beside each, the gnuplot scripts and data in plot-data/), and the same
+// report as one self-contained page, report.html, with the plots inline.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -30,11 +31,12 @@ std::string diagnosis_text(const Diagnosis& diagnosis);
 
 struct ReportOutcome {
     std::filesystem::path markdown;
+    std::filesystem::path html;
     std::vector<std::filesystem::path> images;  // PNG files written
     std::vector<std::string> notes;             // e.g. gnuplot missing
 };
 
-// Writes report.md and its plots into `directory` (created). `data` is the measurement diagnosed;
+// Writes report.md, report.html and the plots into `directory` (created). `data` is the measurement diagnosed;
 // `data_options` (e.g. " --columns i_d=Id") follow `data_path` in the commands the report suggests,
 // so that they read the file as the diagnosis did.
 ReportOutcome write_diagnosis_report(const std::filesystem::path& directory, const Measurement& data, const Diagnosis& diagnosis,
