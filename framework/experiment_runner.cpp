@@ -113,7 +113,8 @@ std::map<std::string, ParameterValue> resolved(const RegistryT& registry, const 
 
 // Refuses to resume when a setting that shapes a trial differs from the run being resumed: the
 // records of both would otherwise end up in one table under one label.
-void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous, const fs::path& output) {
+void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous, const fs::path& output,
+                     const std::optional<Shard>& shard) {
     auto refuse = [&](long line, const std::string& field, const std::string& difference) {
         throw InputError(spec.file.string(), line, field,
                          difference + " in the run being resumed in " + output.string() +
@@ -122,6 +123,14 @@ void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous,
     };
     if (previous.seed != spec.seed)
         refuse(0, "seed", fmt::format("is {} here but was {}", spec.seed, previous.seed));
+    if (previous.shard != shard) {
+        const auto text = [](const std::optional<Shard>& s) {
+            return s ? fmt::format("shard {} of {}", s->index, s->count) : std::string("all trials");
+        };
+        throw InputError("command line", 0, "--shard",
+                         fmt::format("this run is {} but the run being resumed in {} was {}; resume it with the same --shard",
+                                     text(shard), output.string(), text(previous.shard)));
+    }
     if (previous.budget.max_iterations != spec.budget.max_iterations)
         refuse(0, "budget.iterations", fmt::format("is {} here but was {}", spec.budget.max_iterations, previous.budget.max_iterations));
     if (previous.budget.max_evaluations != spec.budget.max_evaluations)
@@ -154,6 +163,8 @@ void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous,
 }
 
 }  // namespace
+
+std::string shard_directory_name(const Shard& shard) { return fmt::format("shard-{}-of-{}", shard.index, shard.count); }
 
 ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<SharedProblemData> shared) {
     ExperimentInfo info;
@@ -205,10 +216,13 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
 RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     RunSummary summary;
-    summary.output = options.output ? *options.output : spec.output;
+    summary.output = options.output ? *options.output
+                     : options.shard ? spec.output / shard_directory_name(*options.shard)
+                                     : spec.output;
     // One measurement read and one set of statistics per problem variant, shared by all its trials.
     const auto shared = std::make_shared<SharedProblemData>();
     summary.info = describe_experiment(spec, shared);
+    summary.info.shard = options.shard;
     const fs::path results_path = summary.output / "results.jsonl";
 
     std::error_code ec;
@@ -225,7 +239,7 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
         if (options.resume) {
             if (earlier_info) {
                 const auto earlier = read_experiment_info(summary.output);
-                check_resumable(spec, earlier, summary.output);
+                check_resumable(spec, earlier, summary.output, options.shard);
                 // The trials kept came from the earlier runs: their provenance stays beside this one's.
                 if (earlier_results) summary.info.runs = earlier.runs;
             }
@@ -250,9 +264,11 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
         std::int64_t trial;
     };
     std::vector<Task> tasks;
+    std::int64_t position = 0;  // in the fixed order that shards divide
     for (std::size_t p = 0; p < spec.problems.size(); ++p)
         for (std::size_t o = 0; o < spec.optimizers.size(); ++o)
-            for (std::int64_t t = 0; t < spec.trials; ++t) {
+            for (std::int64_t t = 0; t < spec.trials; ++t, ++position) {
+                if (options.shard && !options.shard->holds(position)) continue;
                 ++summary.total;
                 if (done.count({spec.optimizers[o].label, spec.problems[p].label, t})) {
                     ++summary.skipped;

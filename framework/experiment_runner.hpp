@@ -19,6 +19,8 @@ struct RunOptions {
     bool resume = false;                           // skip trials already in results.jsonl
     std::optional<std::filesystem::path> output;   // overrides the config's output
     bool progress = true;                          // draw the progress line (when stderr is a terminal)
+    // Run only this share of the trials; the output then defaults to <output>/shard-K-of-N.
+    std::optional<Shard> shard;
 };
 
 struct RunSummary {
@@ -36,5 +38,8 @@ struct RunSummary {
 ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<SharedProblemData> shared = nullptr);
 
 RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options);
+
+// "shard-2-of-8": the directory a shard writes into under the experiment's output by default.
+std::string shard_directory_name(const Shard& shard);
 
 }  // namespace mhb

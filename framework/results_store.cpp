@@ -186,7 +186,7 @@ json to_json(const ExperimentInfo& info) {
     }
     json runs = json::array();
     for (const auto& r : info.runs) runs.push_back(provenance_json(r));
-    return {{"name", info.name},
+    json out = {{"name", info.name},
             {"description", info.description},
             {"config_file", info.config_file},
             {"config_text", info.config_text},
@@ -200,6 +200,8 @@ json to_json(const ExperimentInfo& info) {
             {"references", info.references},
             {"plots", info.plots},
             {"published", published_json(info.published)}};
+    if (info.shard) out["shard"] = {{"index", info.shard->index}, {"count", info.shard->count}};
+    return out;
 }
 
 ExperimentInfo experiment_from_json(const json& j) {
@@ -210,6 +212,12 @@ ExperimentInfo experiment_from_json(const json& j) {
     info.config_text = j.value("config_text", "");
     if (j.contains("runs"))
         for (const auto& r : j["runs"]) info.runs.push_back(provenance_from(r));
+    if (j.contains("shard")) {
+        info.shard = Shard{j["shard"].at("index").get<std::int64_t>(), j["shard"].at("count").get<std::int64_t>()};
+        if (info.shard->count < 1 || info.shard->index < 1 || info.shard->index > info.shard->count)
+            throw std::invalid_argument(fmt::format("shard: index {} of count {} is not a share (1 <= index <= count)",
+                                                    info.shard->index, info.shard->count));
+    }
     info.trials = j.at("trials");
     info.seed = j.at("seed");
     info.budget.max_iterations = j.at("budget").at("iterations");
@@ -304,6 +312,8 @@ ExperimentInfo read_experiment_info(const std::filesystem::path& directory) {
     try {
         return experiment_from_json(json::parse(in));
     } catch (const json::exception& e) {
+        throw InputError(path.string(), 0, "", std::string("unreadable: ") + e.what());
+    } catch (const std::invalid_argument& e) {
         throw InputError(path.string(), 0, "", std::string("unreadable: ") + e.what());
     }
 }

@@ -35,6 +35,17 @@ struct ProblemInfo {
     bool settings_recorded = true;
 };
 
+// One of `count` deterministic shares of an experiment's trials (`mhbench run --shard K/N`): the trials
+// whose place in the fixed order (problem, optimizer, trial) is K-1 modulo N. Consecutive trials go to
+// different shards, so each share holds a slice of every problem and optimiser and the shares cost
+// about the same.
+struct Shard {
+    std::int64_t index = 1;  // 1-based
+    std::int64_t count = 1;
+    bool operator==(const Shard&) const = default;
+    bool holds(std::int64_t position) const { return position % count == index - 1; }
+};
+
 struct ExperimentInfo {
     std::string name;
     std::string description;
@@ -54,6 +65,8 @@ struct ExperimentInfo {
     // One entry per `mhbench run` that wrote trials here (a `--resume` adds one). Empty in files from
     // before provenance was recorded.
     std::vector<Provenance> runs;
+    // Set when the directory holds one shard of the experiment; `mhbench merge` joins them.
+    std::optional<Shard> shard;
 };
 
 nlohmann::json to_json(const TrialRecord& record);

@@ -5,9 +5,11 @@
 #include "framework/experiment_runner.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
+#include "tests/same_results.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
+using mhb::testing::require_same_results;
 
 namespace {
 std::string config(const std::string& optimizers, const std::string& problems, int trials = 6) {
@@ -16,23 +18,6 @@ std::string config(const std::string& optimizers, const std::string& problems, i
 const std::string two_optimizers = "[[optimizer]]\nname = \"random_search\"\nbatch = [4, 16]\n";
 const std::string two_problems = "[[problem]]\nname = \"test_sphere\"\ndimension = [2, 5]\n";
 
-std::map<std::tuple<std::string, std::string, std::int64_t>, TrialRecord> by_key(const std::vector<TrialRecord>& records) {
-    std::map<std::tuple<std::string, std::string, std::int64_t>, TrialRecord> out;
-    for (const auto& r : records) out[{r.optimizer, r.problem, r.trial}] = r;
-    return out;
-}
-
-void require_same_results(const std::vector<TrialRecord>& a, const std::vector<TrialRecord>& b) {
-    const auto ka = by_key(a), kb = by_key(b);
-    REQUIRE(ka.size() == kb.size());
-    for (const auto& [key, ra] : ka) {
-        const auto& rb = kb.at(key);
-        REQUIRE(ra.seed == rb.seed);
-        REQUIRE(ra.best_fitness == rb.best_fitness);  // bitwise
-        REQUIRE(ra.trace_best == rb.trace_best);
-        REQUIRE(ra.evaluations == rb.evaluations);
-    }
-}
 }  // namespace
 
 TEST_CASE("results are bitwise identical on 1 and 2 threads", "[experiment_runner]") {

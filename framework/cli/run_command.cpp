@@ -1,4 +1,5 @@
-// `mhbench run FILE [--threads N] [--out DIR] [--resume]` and `mhbench table DIR`.
+// `mhbench run FILE [--threads N] [--out DIR] [--resume] [--shard K/N]`, `mhbench table DIR` and
+// `mhbench merge DIR... [--out DIR]`.
 #include <cstdio>
 #include <memory>
 
@@ -11,6 +12,7 @@
 #include "framework/experiment_runner.hpp"
 #include "framework/plots.hpp"
 #include "framework/report_tables.hpp"
+#include "framework/shard_merge.hpp"
 
 namespace mhb::cli {
 namespace {
@@ -45,15 +47,39 @@ std::string publish(const fs::path& directory, bool plots, bool quiet) {
     return report;
 }
 
+// "K/N" with 1 <= K <= N; CLI11 prefixes the option's name to the message.
+CLI::Validator shard_format() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            long long k = 0, n = 0;
+            char slash = 0, extra = 0;
+            if (std::sscanf(text.c_str(), "%lld%c%lld%c", &k, &slash, &n, &extra) != 3 || slash != '/' || k < 1 || n < 1 ||
+                k > n || n > 1'000'000)
+                return "expects K/N, the K-th of N shares with 1 <= K <= N <= 1000000, e.g. 2/8 (got '" + text + "')";
+            return {};
+        },
+        "K/N");
+}
+
+Shard parse_shard(const std::string& text) {
+    long long k = 0, n = 0;
+    std::sscanf(text.c_str(), "%lld/%lld", &k, &n);
+    return Shard{k, n};
+}
+
 const bool run_registered = register_command("run", [](CLI::App& app) {
     auto* cmd = app.add_subcommand("run", "Run an experiment described in a TOML file; write results, tables and plots");
     struct Args {
-        std::string file, out;
+        std::string file, out, shard;
         int threads = 0;
         bool resume = false, no_plots = false, quiet = false;
     };
     auto a = std::make_shared<Args>();
     cmd->add_option("FILE", a->file, "experiment TOML file (see experiments/ and docs/config-reference.md)")->required();
+    cmd->add_option("--shard", a->shard,
+                    "run only the K-th of N deterministic shares of the trials, into <output>/shard-K-of-N unless --out "
+                    "is given; `mhbench merge` joins the shares (docs/campaigns.md)")
+        ->check(shard_format());
     cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(whole_number_in(1, 4096));
     cmd->add_option("--out", a->out, "output directory (default: the config's `output`)");
     cmd->add_flag("--resume", a->resume, "keep the trials already in the output's results.jsonl and run only the missing ones");
@@ -65,6 +91,7 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
         options.threads = a->threads;
         options.resume = a->resume;
         if (!a->out.empty()) options.output = fs::path(a->out);
+        if (!a->shard.empty()) options.shard = parse_shard(a->shard);
         if (!a->quiet)
             std::fprintf(stderr, "Running %s: %zu optimizer(s) x %zu problem(s) x %lld trials\n", spec.name.c_str(),
                          spec.optimizers.size(), spec.problems.size(), static_cast<long long>(spec.trials));
@@ -73,6 +100,10 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
         publish(summary.output, !a->no_plots, a->quiet);
         std::fprintf(stderr, "%zu trials run, %zu skipped (already done), %zu failed, in %.3f s wall time.\n", summary.ran,
                      summary.skipped, summary.failed, summary.seconds);
+        if (options.shard)
+            std::fprintf(stderr, "This was shard %s of the trials, in %s; its tables cover that share only. When all %lld "
+                                 "have run: mhbench merge <their directories> (docs/campaigns.md).\n",
+                         a->shard.c_str(), summary.output.string().c_str(), static_cast<long long>(options.shard->count));
         if (summary.failed > 0) {
             std::fprintf(stderr, "error: %zu trial(s) failed; their reasons are in %s/results.jsonl. First:\n", summary.failed,
                          summary.output.string().c_str());
@@ -94,6 +125,30 @@ const bool table_registered = register_command("table", [](CLI::App& app) {
     cmd->add_flag("--no-plots", a->no_plots, "write tables only");
     return std::function<int()>([a] {
         publish(a->dir, !a->no_plots, false);
+        return exit_ok;
+    });
+});
+
+const bool merge_registered = register_command("merge", [](CLI::App& app) {
+    auto* cmd = app.add_subcommand("merge", "Join the shard directories of one experiment (run --shard K/N) into one; write its tables and plots");
+    struct Args {
+        std::vector<std::string> dirs;
+        std::string out;
+        bool no_plots = false, quiet = false;
+    };
+    auto a = std::make_shared<Args>();
+    cmd->add_option("DIR", a->dirs, "the shards' directories (shard-K-of-N), all of them")->required();
+    cmd->add_option("--out", a->out, "where the merged results go (default: the directory holding the shards)");
+    cmd->add_flag("--no-plots", a->no_plots, "write tables only");
+    cmd->add_flag("--quiet", a->quiet, "do not print the tables");
+    return std::function<int()>([a] {
+        std::vector<fs::path> dirs(a->dirs.begin(), a->dirs.end());
+        const fs::path out = a->out.empty() ? default_merge_output(dirs) : fs::path(a->out);
+        const auto summary = merge_shards(dirs, out);
+        for (const auto& note : summary.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
+        publish(summary.output, !a->no_plots, a->quiet);
+        std::fprintf(stderr, "Merged %zu trials from %zu directories into %s.\n", summary.records, dirs.size(),
+                     summary.output.string().c_str());
         return exit_ok;
     });
 });
