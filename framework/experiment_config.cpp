@@ -1,6 +1,9 @@
 #include "framework/experiment_config.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <functional>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -172,6 +175,58 @@ public:
     fs::path file_;
 };
 
+// A list of target precisions: positive numbers, or "bbob" for COCO's 51.
+std::vector<double> read_targets(const ConfigReader& reader, const toml::node& node, const std::string& field) {
+    if (const auto* s = node.as_string()) {
+        if (s->get() == "bbob") return bbob_targets();
+        reader.fail(line_of(node), field, "expects \"bbob\" or a list of f - f* precisions, e.g. [1e1, 1e-1, 1e-3]");
+    }
+    const auto* list = node.as_array();
+    if (!list || list->empty()) reader.fail(line_of(node), field, "expects \"bbob\" or a non-empty list of f - f* precisions");
+    std::vector<double> out;
+    for (const auto& item : *list) {
+        const auto value = item.value<double>();
+        if (!value || !(*value > 0) || !std::isfinite(*value))
+            reader.fail(line_of(item), field, "expects positive finite numbers (precisions f - f*)");
+        out.push_back(*value);
+    }
+    return out;
+}
+
+AnytimeSpec read_anytime(const ConfigReader& reader, const toml::node& node) {
+    const auto* table = node.as_table();
+    if (!table) reader.fail(line_of(node), "anytime", "must be a table, written [anytime]");
+    const long line = line_of(node);
+    for (const auto& [k, v] : *table) {
+        const std::string key(k.str());
+        if (key != "targets" && key != "ert_targets" && key != "points_per_decade" && key != "bootstrap")
+            reader.fail(line_of(v), "anytime." + key, "unknown key; expected targets, ert_targets, points_per_decade or bootstrap");
+    }
+    AnytimeSpec spec;
+    spec.targets = table->get("targets") ? read_targets(reader, *table->get("targets"), "anytime.targets") : bbob_targets();
+    std::sort(spec.targets.begin(), spec.targets.end(), std::greater<>());
+    spec.targets.erase(std::unique(spec.targets.begin(), spec.targets.end()), spec.targets.end());
+    const long targets_line = table->get("targets") ? line_of(*table->get("targets")) : line;
+    if (spec.targets.size() > 1000)
+        reader.fail(targets_line, "anytime.targets", fmt::format("at most 1000 targets (got {}): each trial records one hit per target", spec.targets.size()));
+    // The ERT table's targets are recorded targets, so that each has its hits: matched to within a
+    // rounding error (1e-3 in a config against 10^(-15/5) computed).
+    const std::vector<double> ert = table->get("ert_targets") ? read_targets(reader, *table->get("ert_targets"), "anytime.ert_targets")
+                                                               : std::vector<double>{1e1, 1e-1, 1e-3, 1e-5, 1e-7};
+    for (double e : ert) {
+        const auto match = std::find_if(spec.targets.begin(), spec.targets.end(),
+                                        [e](double t) { return std::abs(t - e) <= 1e-9 * e; });
+        if (match == spec.targets.end())
+            reader.fail(table->get("ert_targets") ? line_of(*table->get("ert_targets")) : targets_line, "anytime.ert_targets",
+                        fmt::format("{:g} is not among anytime.targets; the ERT table shows targets whose hits are recorded", e));
+        spec.ert_targets.push_back(*match);
+    }
+    spec.points_per_decade = static_cast<int>(reader.integer(*table, "points_per_decade", "anytime.points_per_decade", 0, 5, line, false, 100));
+    spec.bootstrap = static_cast<int>(reader.integer(*table, "bootstrap", "anytime.bootstrap", 0, 1000, line, false, 100'000,
+                                                     ": each resample recomputes every ERT and ECDF"));
+    return spec;
+}
+
 }  // namespace
 
 std::vector<std::map<std::string, ParameterValue>> expand_grid(
@@ -214,13 +269,13 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
     } catch (const toml::parse_error& e) {
         reader.fail(static_cast<long>(e.source().begin.line), "", std::string("TOML syntax: ") + std::string(e.description()));
     }
-    static const std::set<std::string> known{"name",   "description", "trials",    "seed",    "output", "budget",
-                                             "analysis", "optimizer",  "problem",   "plots",   "published", "plugins"};
+    static const std::set<std::string> known{"name",     "description", "trials",  "seed",  "output",    "budget",  "analysis",
+                                             "optimizer", "problem",     "plots",   "published", "plugins", "anytime"};
     for (const auto& [k, v] : root)
         if (!known.count(std::string(k.str())))
             reader.fail(line_of(v), std::string(k.str()),
                         "unknown key; expected one of name, description, trials, seed, output, plots, plugins, "
-                        "[budget], [analysis], [[optimizer]], [[problem]], [[published]]");
+                        "[budget], [analysis], [anytime], [[optimizer]], [[problem]], [[published]]");
     const fs::path base = fs::absolute(file).parent_path();
 
     // Before the names are resolved: a plugin may register the optimisers and problems named below.
@@ -276,6 +331,8 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
 
     spec.optimizers = reader.variants(root, "optimizer", "optimizer", OptimizerRegistry::instance());
     spec.problems = reader.variants(root, "problem", "problem", ProblemRegistry::instance());
+
+    if (const auto* node = root.get("anytime")) spec.anytime = read_anytime(reader, *node);
 
     spec.baseline = spec.optimizers.front().label;
     spec.references.clear();

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/anytime.hpp"
 #include "framework/optimizer.hpp"
 #include "framework/parameters.hpp"
 
@@ -53,6 +54,7 @@ struct ExperimentSpec {
     bool plots = true;
     std::vector<PublishedResult> published;
     std::vector<std::filesystem::path> plugins;  // `plugins`, relative paths resolved against the config
+    std::optional<AnytimeSpec> anytime;          // `[anytime]`: record runtimes to targets (ERT, ECDF)
 };
 
 // Whether reading a config loads the plugin libraries its `plugins` list names. Loading runs their

@@ -123,6 +123,8 @@ void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous,
     };
     if (previous.seed != spec.seed)
         refuse(0, "seed", fmt::format("is {} here but was {}", spec.seed, previous.seed));
+    if (previous.anytime != spec.anytime)
+        refuse(0, "anytime", "differs from the [anytime] of the run being resumed (its records would not match)");
     if (previous.shard != shard) {
         const auto text = [](const std::optional<Shard>& s) {
             return s ? fmt::format("shard {} of {}", s->index, s->count) : std::string("all trials");
@@ -180,6 +182,7 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
     info.references = spec.references;
     info.plots = spec.plots;
     info.published = spec.published;
+    info.anytime = spec.anytime;
     for (const auto& v : spec.problems) {
         const auto problem = create_problem(spec, v, problem_context(spec, derive_seed(spec.seed, "", v.label, 0), shared));
         ProblemInfo p;
@@ -193,6 +196,9 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
         p.parameters = v.values;
         p.lower = v.lower;
         p.upper = v.upper;
+        if (spec.anytime && !p.truth.optimum_value)
+            throw InputError(spec.file.string(), v.line, "problem " + v.label,
+                             "does not know its optimum f*, which [anytime] needs: its targets are precisions f - f*");
         info.problems.push_back(std::move(p));
     }
     for (const auto& pub : spec.published)
@@ -296,6 +302,10 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
                 auto problem = instantiate(pv, problem_context(spec, seed, shared));
                 auto optimizer = make_optimizer(ov.name, ov.values);
                 TrialSetup setup{spec.budget, seed, problem->has_named_parameters()};
+                if (spec.anytime) {
+                    setup.anytime = &*spec.anytime;
+                    setup.optimum = *problem->truth().optimum_value;
+                }
                 record = run_trial(*optimizer, *problem, setup);
             } catch (const std::exception& e) {  // a factory that throws fails only this trial
                 record.ok = false;

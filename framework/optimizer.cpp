@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "framework/anytime.hpp"
 #include "framework/input_error.hpp"
 
 namespace mhb {
@@ -35,6 +36,7 @@ Eigen::Index Evaluator::evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<V
         }
     }
     if (n > 0) problem_.evaluate(x.leftCols(n), f.head(n));
+    const std::int64_t before = used_;
     used_ += n;
     for (Eigen::Index i = 0; i < n; ++i) {
         if (std::isnan(f[i]))
@@ -43,6 +45,8 @@ Eigen::Index Evaluator::evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<V
             best_fitness_ = f[i];
             best_position_ = x.col(i);
         }
+        // Column by column: the record knows the very evaluation that reached a target.
+        if (recorder_) recorder_->observe(before + i + 1, best_fitness_);
     }
     f.tail(x.cols() - n).setConstant(std::numeric_limits<double>::infinity());
     return n;

@@ -16,6 +16,8 @@ struct Budget {
     std::int64_t max_evaluations = 0;
 };
 
+class AnytimeRecorder;
+
 class Evaluator {
 public:
     Evaluator(const Problem& problem, Budget budget);
@@ -39,12 +41,16 @@ public:
     double best_fitness() const { return best_fitness_; }
     const Vector& best_position() const { return best_position_; }
 
+    // Tells `recorder` (which must outlive the evaluator) the best-so-far after every evaluation.
+    void record_anytime(AnytimeRecorder* recorder) { recorder_ = recorder; }
+
 private:
     const Problem& problem_;
     Budget budget_;
     std::int64_t used_ = 0;
     double best_fitness_ = std::numeric_limits<double>::infinity();
     Vector best_position_;
+    AnytimeRecorder* recorder_ = nullptr;
 };
 
 // Where a run stands when an iteration starts.

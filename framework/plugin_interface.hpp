@@ -3,7 +3,8 @@
 // include/mhbench (registry, optimizer, problem, parameters, random, commands, the PMSM effect).
 // Raise the version with any change to them that a plugin built before it would not survive: a
 // class's layout, a virtual function, a signature, a registry's entry.
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 1
+// 2: Evaluator gained the anytime recorder (a member, so its size changed).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 2
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

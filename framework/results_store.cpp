@@ -141,6 +141,12 @@ json to_json(const TrialRecord& r) {
         trace["position"] = std::move(positions);
     }
     j["trace"] = std::move(trace);
+    if (!r.anytime.empty()) {
+        json best = json::array(), hit_best = json::array();
+        for (double b : r.anytime.best) best.push_back(number(b));
+        for (double b : r.anytime.hit_best) hit_best.push_back(number(b));
+        j["anytime"] = {{"evaluations", r.anytime.evaluations}, {"best", best}, {"hits", r.anytime.hits}, {"hit_best", hit_best}};
+    }
     return j;
 }
 
@@ -162,6 +168,15 @@ TrialRecord trial_from_json(const json& j) {
     for (const auto& b : t.at("best")) r.trace_best.push_back(number_from(b));
     if (t.contains("position"))
         for (const auto& p : t["position"]) r.trace_position.push_back(vector_from(p));
+    if (j.contains("anytime")) {
+        const auto& a = j["anytime"];
+        r.anytime.evaluations = a.at("evaluations").get<std::vector<std::int64_t>>();
+        for (const auto& b : a.at("best")) r.anytime.best.push_back(number_from(b));
+        r.anytime.hits = a.at("hits").get<std::vector<std::int64_t>>();
+        for (const auto& b : a.at("hit_best")) r.anytime.hit_best.push_back(number_from(b));
+        if (r.anytime.best.size() != r.anytime.evaluations.size() || r.anytime.hit_best.size() != r.anytime.hits.size())
+            throw std::invalid_argument("anytime: evaluations and best, or hits and hit_best, differ in length");
+    }
     return r;
 }
 
@@ -201,6 +216,11 @@ json to_json(const ExperimentInfo& info) {
             {"plots", info.plots},
             {"published", published_json(info.published)}};
     if (info.shard) out["shard"] = {{"index", info.shard->index}, {"count", info.shard->count}};
+    if (info.anytime)
+        out["anytime"] = {{"targets", info.anytime->targets},
+                          {"ert_targets", info.anytime->ert_targets},
+                          {"points_per_decade", info.anytime->points_per_decade},
+                          {"bootstrap", info.anytime->bootstrap}};
     return out;
 }
 
@@ -217,6 +237,11 @@ ExperimentInfo experiment_from_json(const json& j) {
         if (info.shard->count < 1 || info.shard->index < 1 || info.shard->index > info.shard->count)
             throw std::invalid_argument(fmt::format("shard: index {} of count {} is not a share (1 <= index <= count)",
                                                     info.shard->index, info.shard->count));
+    }
+    if (j.contains("anytime")) {
+        const auto& a = j["anytime"];
+        info.anytime = AnytimeSpec{a.at("targets").get<std::vector<double>>(), a.at("ert_targets").get<std::vector<double>>(),
+                                   a.at("points_per_decade").get<int>(), a.at("bootstrap").get<int>()};
     }
     info.trials = j.at("trials");
     info.seed = j.at("seed");

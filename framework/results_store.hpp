@@ -67,6 +67,8 @@ struct ExperimentInfo {
     std::vector<Provenance> runs;
     // Set when the directory holds one shard of the experiment; `mhbench merge` joins them.
     std::optional<Shard> shard;
+    // `[anytime]` of the config: the records then carry anytime data, the tables ERT and ECDFs.
+    std::optional<AnytimeSpec> anytime;
 };
 
 nlohmann::json to_json(const TrialRecord& record);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <optional>
 
 #include "framework/input_error.hpp"
 
@@ -14,6 +15,11 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     const auto start = std::chrono::steady_clock::now();
     Evaluator evaluator(problem, setup.budget);
     Rng rng(setup.seed);
+    std::optional<AnytimeRecorder> anytime;
+    if (setup.anytime) {
+        anytime.emplace(*setup.anytime, setup.optimum);
+        evaluator.record_anytime(&*anytime);
+    }
 
     auto record = [&] {
         rec.trace_evaluations.push_back(evaluator.evaluations());
@@ -57,6 +63,7 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     rec.best_fitness = evaluator.best_fitness();
     rec.best_position = evaluator.best_position();
     rec.evaluations = evaluator.evaluations();
+    if (anytime) rec.anytime = anytime->take();
     rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return rec;
 }

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/anytime.hpp"
 #include "framework/optimizer.hpp"
 
 namespace mhb {
@@ -27,12 +28,18 @@ struct TrialRecord {
     std::vector<std::int64_t> trace_evaluations;
     std::vector<double> trace_best;
     std::vector<Vector> trace_position;  // best-so-far position; filled when record_positions
+
+    // Filled when the experiment has [anytime] (framework/anytime.hpp).
+    AnytimeRecord anytime;
 };
 
 struct TrialSetup {
     Budget budget;
     std::uint64_t seed = 0;
     bool record_positions = false;
+    // Record anytime data against this optimum (f*); null: none.
+    const AnytimeSpec* anytime = nullptr;
+    double optimum = 0.0;
 };
 
 // Runs the trial. Exceptions thrown by the plugins (including PluginFault from the evaluator) fail
