@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "framework/anytime_analysis.hpp"
 #include "framework/input_error.hpp"
 #include "framework/process.hpp"
 #include "framework/report_tables.hpp"
@@ -123,13 +124,14 @@ Band convergence_band(const ProblemInfo& prob, const std::vector<const TrialReco
     return band;
 }
 
-std::string line_style(std::size_t i) {
+
+}  // namespace
+
+std::string plot_line_style(std::size_t i) {
     static const char* colors[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02",
                                    "#a6761d", "#666666", "#1f78b4", "#b2df8a", "#fb9a99", "#cab2d6"};
     return fmt::format("lc rgb '{}'", colors[i % 12]);
 }
-
-}  // namespace
 
 PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
     PlotOutcome outcome;
@@ -183,7 +185,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
                 if (b.x.empty()) continue;
                 plots += fmt::format("{}{} index {} using 1:3:4 with filledcurves fs transparent solid 0.18 noborder {} notitle, "
                                      "'' index {} using 1:2 with lines lw 2 {} title {} noenhanced",
-                                     plots.empty() ? "" : ", ", gnuplot_quote(data.string()), o, line_style(o), o, line_style(o),
+                                     plots.empty() ? "" : ", ", gnuplot_quote(data.string()), o, plot_line_style(o), o, plot_line_style(o),
                                      gnuplot_quote(info.optimizers[o].label));
             }
             out.close();
@@ -216,7 +218,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
                 out << "\n\n";
                 if (groups.ok[p][o].empty()) continue;
                 plots += fmt::format("{}{} index {} using ({}):1 {} notitle", plots.empty() ? "" : ", ",
-                                     gnuplot_quote(data.string()), o, o + 1, line_style(o));
+                                     gnuplot_quote(data.string()), o, o + 1, plot_line_style(o));
                 tics += fmt::format("{}{} {}", tics.empty() ? "" : ", ", gnuplot_quote(info.optimizers[o].label), o + 1);
             }
             out.close();
@@ -301,7 +303,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
                 for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                     if (!has[o]) continue;
                     plots += fmt::format("{}{} index {} using 1:{} with lines lw 2 {} title {} noenhanced", plots.empty() ? "" : ", ",
-                                         gnuplot_quote(data.string()), o, j + 3, line_style(o), gnuplot_quote(info.optimizers[o].label));
+                                         gnuplot_quote(data.string()), o, j + 3, plot_line_style(o), gnuplot_quote(info.optimizers[o].label));
                 }
                 if (truth)
                     plots += fmt::format(", {:.12g} with lines dt 2 lw 2 lc rgb 'black' title {}", (*truth)[j],
@@ -312,6 +314,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
             render(directory / ("parameters_" + name), body, 1000, 300 * rows + 60);
         }
     }
+    write_ecdf_plots(directory, data_dir, info, records, render);
     return outcome;
 }
 

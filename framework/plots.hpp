@@ -18,6 +18,9 @@ struct PlotOutcome {
 PlotOutcome write_plots(const std::filesystem::path& directory, const ExperimentInfo& info,
                         const std::vector<TrialRecord>& records);
 
+// The colour of the i-th optimiser, the same in every plot.
+std::string plot_line_style(std::size_t i);
+
 // File-name form of a label: letters, digits, '-', '.' and '_' only.
 std::string slug(const std::string& label);
 

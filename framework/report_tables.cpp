@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "framework/anytime_analysis.hpp"
 #include "framework/file_output.hpp"
 #include "framework/html_report.hpp"
 #include "framework/input_error.hpp"
@@ -273,6 +274,8 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                               info.optimizers.size() - 1, pval(f.p));
         }
     }
+
+    md += anytime_markdown(info, records);
 
     double total = 0;
     std::size_t n = 0, failed = 0;
