@@ -318,16 +318,23 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
                                                     "a [budget] table with iterations and/or evaluations is required");
     const auto& bt = *budget->as_table();
     for (const auto& [k, v] : bt)
-        if (k.str() != "iterations" && k.str() != "evaluations")
-            reader.fail(line_of(v), "budget." + std::string(k.str()), "unknown key; expected iterations or evaluations");
+        if (k.str() != "iterations" && k.str() != "evaluations" && k.str() != "evaluations_per_dimension")
+            reader.fail(line_of(v), "budget." + std::string(k.str()),
+                        "unknown key; expected iterations, evaluations or evaluations_per_dimension");
     const char* trace_cost = ": each iteration adds an entry to the trial's convergence trace, held in memory and written "
                              "to results.jsonl";
     spec.budget.max_iterations =
         reader.integer(bt, "iterations", "budget.iterations", 1, 0, line_of(*budget), false, max_budget_iterations, trace_cost);
     spec.budget.max_evaluations = reader.integer(bt, "evaluations", "budget.evaluations", 1, 0, line_of(*budget), false,
                                                  max_budget_evaluations, trace_cost);
-    if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0)
-        reader.fail(line_of(*budget), "budget", "set iterations, evaluations or both");
+    spec.evaluations_per_dimension = reader.integer(bt, "evaluations_per_dimension", "budget.evaluations_per_dimension", 1, 0,
+                                                    line_of(*budget), false, max_budget_evaluations / 100,
+                                                    ": times a dimension of up to 100 it must stay within the evaluation limit");
+    if (spec.evaluations_per_dimension > 0 && spec.budget.max_evaluations > 0)
+        reader.fail(line_of(*bt.get("evaluations_per_dimension")), "budget.evaluations_per_dimension",
+                    "set evaluations or evaluations_per_dimension, not both");
+    if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0 && spec.evaluations_per_dimension == 0)
+        reader.fail(line_of(*budget), "budget", "set iterations, evaluations or both (evaluations_per_dimension in place of evaluations)");
 
     spec.optimizers = reader.variants(root, "optimizer", "optimizer", OptimizerRegistry::instance());
     spec.problems = reader.variants(root, "problem", "problem", ProblemRegistry::instance());

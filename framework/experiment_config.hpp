@@ -46,6 +46,9 @@ struct ExperimentSpec {
     std::int64_t trials = 0;
     std::uint64_t seed = 0;
     Budget budget;
+    // `budget.evaluations_per_dimension`: each problem's evaluation budget is this times its
+    // dimension (as COCO budgets scale), in place of one `evaluations` for all; 0 when not given.
+    std::int64_t evaluations_per_dimension = 0;
     std::filesystem::path output;     // resolved: relative paths are relative to the config file
     std::vector<PluginVariant> optimizers;
     std::vector<PluginVariant> problems;

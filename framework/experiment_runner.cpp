@@ -135,6 +135,9 @@ void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous,
     }
     if (previous.budget.max_iterations != spec.budget.max_iterations)
         refuse(0, "budget.iterations", fmt::format("is {} here but was {}", spec.budget.max_iterations, previous.budget.max_iterations));
+    if (previous.evaluations_per_dimension != spec.evaluations_per_dimension)
+        refuse(0, "budget.evaluations_per_dimension",
+               fmt::format("is {} here but was {}", spec.evaluations_per_dimension, previous.evaluations_per_dimension));
     if (previous.budget.max_evaluations != spec.budget.max_evaluations)
         refuse(0, "budget.evaluations",
                fmt::format("is {} here but was {}", spec.budget.max_evaluations, previous.budget.max_evaluations));
@@ -177,6 +180,7 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
     info.trials = spec.trials;
     info.seed = spec.seed;
     info.budget = spec.budget;
+    info.evaluations_per_dimension = spec.evaluations_per_dimension;
     info.optimizers = spec.optimizers;
     info.baseline = spec.baseline;
     info.references = spec.references;
@@ -302,6 +306,8 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
                 auto problem = instantiate(pv, problem_context(spec, seed, shared));
                 auto optimizer = make_optimizer(ov.name, ov.values);
                 TrialSetup setup{spec.budget, seed, problem->has_named_parameters()};
+                if (spec.evaluations_per_dimension > 0)
+                    setup.budget.max_evaluations = spec.evaluations_per_dimension * problem->dimension();
                 if (spec.anytime) {
                     setup.anytime = &*spec.anytime;
                     setup.optimum = *problem->truth().optimum_value;

@@ -130,13 +130,16 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
     const auto summaries = summarize_groups(info, groups);
     std::string md = fmt::format("# {}\n\n", info.name);
     if (!info.description.empty()) md += info.description + "\n\n";
+    const std::string evaluations = info.evaluations_per_dimension > 0
+                                        ? fmt::format("{} x dimension", info.evaluations_per_dimension)
+                                        : fmt::format("{}", info.budget.max_evaluations);
+    const bool evaluation_limit = info.budget.max_evaluations > 0 || info.evaluations_per_dimension > 0;
     md += fmt::format("Config `{}`; {} trials per pair; master seed {}; budget: {}.\n\n",
                       std::filesystem::path(info.config_file).filename().string(), info.trials, info.seed,
-                      info.budget.max_evaluations > 0
-                          ? (info.budget.max_iterations > 0 ? fmt::format("{} iterations or {} evaluations, whichever first",
-                                                                          info.budget.max_iterations, info.budget.max_evaluations)
-                                                            : fmt::format("{} function evaluations", info.budget.max_evaluations))
-                          : fmt::format("{} iterations", info.budget.max_iterations));
+                      evaluation_limit ? (info.budget.max_iterations > 0 ? fmt::format("{} iterations or {} evaluations, whichever first",
+                                                                                       info.budget.max_iterations, evaluations)
+                                                                         : fmt::format("{} function evaluations", evaluations))
+                                       : fmt::format("{} iterations", info.budget.max_iterations));
     md += "Columns: final fitness statistics over the successful trials (minus the known optimum f* where "
           "there is one), the mean number of function evaluations used, two-sided Wilcoxon rank-sum p-values and "
           "Vargha-Delaney A12 (probability that a run of the row's optimiser ends lower than one of the reference) "

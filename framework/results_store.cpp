@@ -216,6 +216,7 @@ json to_json(const ExperimentInfo& info) {
             {"plots", info.plots},
             {"published", published_json(info.published)}};
     if (info.shard) out["shard"] = {{"index", info.shard->index}, {"count", info.shard->count}};
+    if (info.evaluations_per_dimension > 0) out["budget"]["evaluations_per_dimension"] = info.evaluations_per_dimension;
     if (info.anytime)
         out["anytime"] = {{"targets", info.anytime->targets},
                           {"ert_targets", info.anytime->ert_targets},
@@ -247,6 +248,7 @@ ExperimentInfo experiment_from_json(const json& j) {
     info.seed = j.at("seed");
     info.budget.max_iterations = j.at("budget").at("iterations");
     info.budget.max_evaluations = j.at("budget").at("evaluations");
+    info.evaluations_per_dimension = j.at("budget").value("evaluations_per_dimension", std::int64_t{0});
     for (const auto& o : j.at("optimizers")) info.optimizers.push_back(variant_from(o));
     for (const auto& p : j.at("problems")) {
         ProblemInfo pi;

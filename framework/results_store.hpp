@@ -53,6 +53,7 @@ struct ExperimentInfo {
     std::int64_t trials = 0;
     std::uint64_t seed = 0;
     Budget budget;
+    std::int64_t evaluations_per_dimension = 0;  // see ExperimentSpec
     std::vector<PluginVariant> optimizers;
     std::vector<ProblemInfo> problems;
     std::string baseline;

@@ -233,3 +233,22 @@ TEST_CASE("a full disk stops the run with a message naming the results file", "[
                                  Catch::Contains("--resume"));
     }
 }
+
+TEST_CASE("a budget per dimension gives each problem its dimension times the evaluations, as COCO's do", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const std::string body = "name = \"d\"\ntrials = 2\nseed = 4\n[budget]\nevaluations_per_dimension = 30\n" + two_optimizers + two_problems;
+    const auto spec = load_experiment(dir.write("e.toml", body));
+    RunOptions options;
+    options.output = dir.path() / "out";
+    options.progress = false;
+    run_experiment(spec, options);
+    const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
+    REQUIRE(records.size() == 8);
+    for (const auto& r : records) CHECK(r.evaluations == (r.problem == "test_sphere(dimension=2)" ? 60 : 150));
+    CHECK(read_experiment_info(dir.path() / "out").evaluations_per_dimension == 30);
+
+    const auto both = dir.write("both.toml", "trials = 1\nseed = 1\n[budget]\nevaluations = 10\nevaluations_per_dimension = 30\n" +
+                                                 two_optimizers + two_problems);
+    CHECK_THROWS_WITH(load_experiment(both), Catch::Contains("both.toml:5: budget.evaluations_per_dimension: set evaluations or "
+                                                             "evaluations_per_dimension, not both"));
+}
