@@ -369,8 +369,12 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
                     known_label(s->get(), item, "analysis.references");
                     spec.references.push_back(s->get());
                 }
+            } else if (key == "per_problem") {
+                auto b = v.as_boolean();
+                if (!b) reader.fail(line_of(v), "analysis.per_problem", "expects true or false");
+                spec.per_problem = b->get();
             } else {
-                reader.fail(line_of(v), "analysis." + key, "unknown key; expected baseline or references");
+                reader.fail(line_of(v), "analysis." + key, "unknown key; expected baseline, references or per_problem");
             }
         }
     }

@@ -55,6 +55,9 @@ struct ExperimentSpec {
     std::string baseline;             // optimiser label the others are tested against
     std::vector<std::string> references;  // labels for pairwise columns (default: the baseline)
     bool plots = true;
+    // `analysis.per_problem = false`: no table and no plot per problem variant (a campaign has
+    // thousands); the CSV keeps every row, and the summaries across problems stay.
+    bool per_problem = true;
     std::vector<PublishedResult> published;
     std::vector<std::filesystem::path> plugins;  // `plugins`, relative paths resolved against the config
     std::optional<AnytimeSpec> anytime;          // `[anytime]`: record runtimes to targets (ERT, ECDF)

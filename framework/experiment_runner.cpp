@@ -185,6 +185,7 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
     info.baseline = spec.baseline;
     info.references = spec.references;
     info.plots = spec.plots;
+    info.per_problem = spec.per_problem;
     info.published = spec.published;
     info.anytime = spec.anytime;
     for (const auto& v : spec.problems) {

@@ -150,7 +150,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
         return false;
     };
 
-    for (std::size_t p = 0; p < info.problems.size(); ++p) {
+    for (std::size_t p = 0; p < (info.per_problem ? info.problems.size() : 0); ++p) {
         const auto& prob = info.problems[p];
         const std::string name = slug(prob.label);
         const bool shifted = prob.truth.optimum_value.has_value();

@@ -145,7 +145,11 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
           "Vargha-Delaney A12 (probability that a run of the row's optimiser ends lower than one of the reference) "
           "against each reference optimiser, and run time.\n\n";
 
-    for (std::size_t p = 0; p < info.problems.size(); ++p) {
+    if (!info.per_problem)
+        md += fmt::format("Per-problem tables are off (analysis.per_problem = false): table.csv has a row for each of the {} "
+                          "problems and each optimiser.\n\n",
+                          info.problems.size());
+    for (std::size_t p = 0; p < (info.per_problem ? info.problems.size() : 0); ++p) {
         const auto& prob = info.problems[p];
         md += fmt::format("## {}\n\n", prob.label);
         if (!prob.description.empty()) md += prob.description + "\n\n";

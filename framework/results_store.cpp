@@ -214,6 +214,7 @@ json to_json(const ExperimentInfo& info) {
             {"baseline", info.baseline},
             {"references", info.references},
             {"plots", info.plots},
+            {"per_problem", info.per_problem},
             {"published", published_json(info.published)}};
     if (info.shard) out["shard"] = {{"index", info.shard->index}, {"count", info.shard->count}};
     if (info.evaluations_per_dimension > 0) out["budget"]["evaluations_per_dimension"] = info.evaluations_per_dimension;
@@ -274,6 +275,7 @@ ExperimentInfo experiment_from_json(const json& j) {
     info.baseline = j.at("baseline");
     info.references = j.at("references").get<std::vector<std::string>>();
     info.plots = j.value("plots", true);
+    info.per_problem = j.value("per_problem", true);
     if (j.contains("published")) info.published = published_from(j["published"]);
     return info;
 }

@@ -59,6 +59,7 @@ struct ExperimentInfo {
     std::string baseline;
     std::vector<std::string> references;
     bool plots = true;
+    bool per_problem = true;  // see ExperimentSpec
     std::vector<PublishedResult> published;
     // The config file's text as the run read it, so the results show what made them even after the
     // file has changed. Empty in files from before it was recorded.

@@ -3,12 +3,14 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <fstream>
 
 #include <fmt/format.h>
 
 #include "framework/anytime_analysis.hpp"
 #include "framework/experiment_runner.hpp"
 #include "framework/random.hpp"
+#include "framework/report_tables.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -150,4 +152,45 @@ dimension = 2
                          return true;
                      });
     CHECK(rendered == std::vector<std::string>{"ecdf_D2"});
+}
+
+TEST_CASE("a campaign without per-problem tables keeps every CSV row and the summaries across problems", "[anytime]") {
+    testing::TemporaryDirectory dir;
+    const auto spec = load_experiment(dir.write("e.toml", R"(name = "c"
+trials = 2
+seed = 3
+[budget]
+evaluations_per_dimension = 100
+[anytime]
+targets = [1, 1e-2]
+ert_targets = [1e-2]
+bootstrap = 50
+[analysis]
+per_problem = false
+[[optimizer]]
+name = "random_search"
+[[optimizer]]
+name = "cmaes"
+[[problem]]
+name = "test_sphere"
+dimension = [2, 3]
+shift = [0.5, 1.0]
+)"));
+    RunOptions options;
+    options.output = dir.path() / "out";
+    options.progress = false;
+    run_experiment(spec, options);
+    const auto info = read_experiment_info(dir.path() / "out");
+    CHECK_FALSE(info.per_problem);
+    const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
+    const std::string md = write_tables(dir.path() / "out", info, records);
+    CHECK(md.find("## test_sphere") == std::string::npos);
+    CHECK(md.find("table.csv has a row for each of the 4 problems") != std::string::npos);
+    CHECK(md.find("### ERT, dimension 2") != std::string::npos);
+    CHECK(md.find("| test_sphere(shift=0.5) | cmaes |") != std::string::npos);  // shift tells functions apart
+    CHECK(md.find("| test_sphere(shift=1) | cmaes |") != std::string::npos);
+    std::ifstream csv(dir.path() / "out" / "table.csv");
+    std::size_t lines = 0;
+    for (std::string line; std::getline(csv, line);) ++lines;
+    CHECK(lines == 1 + 4 * 2);
 }
