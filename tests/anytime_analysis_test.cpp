@@ -15,6 +15,17 @@
 
 using namespace mhb;
 
+namespace {
+// Runs the experiment into `out` and returns what its experiment.json says.
+ExperimentInfo run_into(const std::filesystem::path& out, const ExperimentSpec& spec) {
+    RunOptions options;
+    options.output = out;
+    options.progress = false;
+    run_experiment(spec, options);
+    return read_experiment_info(out);
+}
+}  // namespace
+
 TEST_CASE("ERT is the evaluations of all runs until success over the successes", "[anytime]") {
     const auto ert = expected_running_time({{100, 1000}, {0, 1000}, {300, 1000}}, 0, 1);
     CHECK(ert.value == 700.0);  // (100 + 1000 + 300) / 2
@@ -119,11 +130,7 @@ name = "cmaes"
 name = "test_sphere"
 dimension = 2
 )"));
-    RunOptions options;
-    options.output = dir.path() / "out";
-    options.progress = false;
-    run_experiment(spec, options);
-    const auto info = read_experiment_info(dir.path() / "out");
+    const auto info = run_into(dir.path() / "out", spec);
     REQUIRE(info.anytime == spec.anytime);
     const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
     const std::string md = anytime_markdown(info, records);
@@ -176,11 +183,7 @@ name = "test_sphere"
 dimension = [2, 3]
 shift = [0.5, 1.0]
 )"));
-    RunOptions options;
-    options.output = dir.path() / "out";
-    options.progress = false;
-    run_experiment(spec, options);
-    const auto info = read_experiment_info(dir.path() / "out");
+    const auto info = run_into(dir.path() / "out", spec);
     CHECK_FALSE(info.per_problem);
     const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
     const std::string md = write_tables(dir.path() / "out", info, records);
