@@ -301,6 +301,7 @@ void write_ecdf_plots(const fs::path& directory, const fs::path& data_dir, const
             gnuplot_quote(fmt::format("Runtime ECDF, dimension {}: {} function(s), {} targets f - f* from {} to {}", d,
                                       of_dimension.size(), spec.targets.size(), target_text(spec.targets.front()),
                                       target_text(spec.targets.back()))));
+        body += fmt::format("set xrange [{:.6g}:{:.6g}]\n", budgets.front(), budgets.back());
         body += "set logscale x\nset format x '10^{%L}'\nset yrange [0:1]\nset key outside right top\nset grid\nplot " + plots + "\n";
         render(directory / fmt::format("ecdf_D{}", d), body, 1000, 600);
     }

@@ -130,7 +130,8 @@ Band convergence_band(const ProblemInfo& prob, const std::vector<const TrialReco
 std::string plot_line_style(std::size_t i) {
     static const char* colors[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02",
                                    "#a6761d", "#666666", "#1f78b4", "#b2df8a", "#fb9a99", "#cab2d6"};
-    return fmt::format("lc rgb '{}'", colors[i % 12]);
+    // Past twelve optimisers the colours repeat, dashed.
+    return fmt::format("lc rgb '{}'{}", colors[i % 12], i >= 12 ? " dt 2" : "");
 }
 
 PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
