@@ -168,3 +168,20 @@ TEST_CASE("published numbers are read and checked against the experiment's probl
     const auto bad = load_experiment(dir.write("bad.toml", base + "[[published]]\nlabel = \"X\"\nproblem = \"S\"\nsource = \"s\"\nmean = { Rs = 1 }\n"));
     REQUIRE_THROWS_WITH(describe_experiment(bad), Catch::Contains("published.Rs: problem 'S' has no parameter named 'Rs'"));
 }
+
+TEST_CASE("every experiment config shipped in experiments/ loads", "[experiment_config]") {
+    std::size_t configs = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments")) {
+        if (entry.path().extension() != ".toml") continue;
+        INFO(entry.path().string());
+        const auto spec = load_experiment(entry.path());
+        CHECK_FALSE(spec.optimizers.empty());
+        ++configs;
+    }
+    CHECK(configs >= 10);
+    // The campaign: 13 optimizers x 24 functions x 6 dimensions x 15 instances, budgets 10^4 x D.
+    const auto campaign = load_experiment(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "bbob_campaign.toml");
+    CHECK(campaign.optimizers.size() * campaign.problems.size() * static_cast<std::size_t>(campaign.trials) == 28080);
+    CHECK(campaign.evaluations_per_dimension == 10000);
+    CHECK(campaign.anytime.has_value());
+}
