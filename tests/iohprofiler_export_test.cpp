@@ -13,6 +13,7 @@
 #include "framework/experiment_runner.hpp"
 #include "framework/input_error.hpp"
 #include "framework/iohprofiler_export.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -353,4 +354,53 @@ TEST_CASE("an export of a directory without a successful trial is refused", "[io
         CHECK_THAT(e.what(), Catch::Contains("results.jsonl") && Catch::Contains("holds no successful trial"));
     }
     CHECK_FALSE(fs::exists(dir.path() / "out"));
+}
+
+TEST_CASE("mhbench export from the command line: the default folder, and refusals with exit code 2", "[iohprofiler][cli]") {
+    TemporaryDirectory dir;
+    const auto config = dir.write("e.toml", "name = \"cli\"\ntrials = 2\nseed = 3\noutput = \"results\"\n[budget]\n"
+                                            "evaluations = 200\n[anytime]\n[[optimizer]]\nname = \"random_search\"\n"
+                                            "[[problem]]\nname = \"F1\"\ndimension = [2, 4]\n");
+    const auto ran = testing::run_mhbench({"run", config.string(), "--quiet", "--no-plots"}, dir.path() / "run.log");
+    INFO(ran.output);
+    REQUIRE(ran.exit_code == 0);
+    const fs::path results = dir.path() / "results";
+
+    const auto exported = testing::run_mhbench({"export", "--format", "iohprofiler", results.string()}, dir.path() / "export.log");
+    INFO(exported.output);
+    CHECK(exported.exit_code == 0);
+    CHECK_THAT(exported.output, Catch::Contains("Exported 4 runs of 1 algorithm(s) on 1 function(s) to " +
+                                                (results / "iohprofiler").string()));
+    CHECK(fs::exists(results / "iohprofiler" / "random_search" / "IOHprofiler_f1_F1.info"));
+    CHECK(parse_info(results / "iohprofiler" / "random_search" / "IOHprofiler_f1_F1.info").size() == 2);
+
+    const auto again = testing::run_mhbench({"export", "--format", "iohprofiler", results.string()}, dir.path() / "again.log");
+    CHECK(again.exit_code == 2);
+    CHECK_THAT(again.output, Catch::Contains("error: " + (results / "iohprofiler").string() + ": --out: already holds files"));
+
+    const auto elsewhere = testing::run_mhbench({"export", "--format", "iohprofiler", results.string(), "--out",
+                                                 (dir.path() / "new" / "ioh").string()},
+                                                dir.path() / "elsewhere.log");
+    CHECK(elsewhere.exit_code == 0);
+    CHECK(fs::exists(dir.path() / "new" / "ioh" / "random_search" / "data_f1_F1" / "IOHprofiler_f1_DIM4.dat"));
+
+    fs::create_directories(dir.path() / "empty");
+    const auto into_empty = testing::run_mhbench({"export", "--format", "iohprofiler", results.string(), "--out",
+                                                  (dir.path() / "empty").string()},
+                                                 dir.path() / "empty.log");
+    CHECK(into_empty.exit_code == 0);
+
+    const auto format = testing::run_mhbench({"export", "--format", "coco", results.string()}, dir.path() / "format.log");
+    CHECK(format.exit_code == 2);
+    CHECK_THAT(format.output, Catch::Contains("error: command line: --format: unknown format 'coco'; known: iohprofiler"));
+
+    const auto no_format = testing::run_mhbench({"export", results.string()}, dir.path() / "no_format.log");
+    CHECK(no_format.exit_code == 2);
+    CHECK_THAT(no_format.output, Catch::Contains("--format is required"));
+
+    const auto not_results = testing::run_mhbench({"export", "--format", "iohprofiler", dir.path().string()}, dir.path() / "not.log");
+    CHECK(not_results.exit_code == 2);
+    CHECK_THAT(not_results.output, Catch::Contains("error: " + (dir.path() / "experiment.json").string() +
+                                                   ": missing: is this an mhbench results directory?"));
+    CHECK_FALSE(fs::exists(dir.path() / "iohprofiler"));
 }
