@@ -28,6 +28,9 @@ std::string function_key(const ProblemInfo& p) {
     std::string settings;
     for (const auto& [k, v] : p.parameters)
         if (k != "instance" && k != "dimension") settings += (settings.empty() ? "" : ", ") + k + "=" + to_string(v);
+    // A box of the config's makes another function, as in the IOHprofiler export.
+    if (!p.lower.empty()) settings += fmt::format("{}lower=[{}]", settings.empty() ? "" : ", ", fmt::join(p.lower, ", "));
+    if (!p.upper.empty()) settings += fmt::format("{}upper=[{}]", settings.empty() ? "" : ", ", fmt::join(p.upper, ", "));
     return settings.empty() ? p.name : p.name + "(" + settings + ")";
 }
 

@@ -14,7 +14,7 @@
 namespace mhb {
 
 // A function of the analysis: a problem name with its settings other than `instance` and
-// `dimension`, at one dimension. Its problem variants are its instances; their runs are pooled.
+// `dimension` (a box given in the config included), at one dimension. Its problem variants are its instances; their runs are pooled.
 struct AnytimeFunction {
     std::string label;                 // e.g. "bbob_f3", or "F1(scale=2)"
     int dimension = 0;
