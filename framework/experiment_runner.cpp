@@ -224,50 +224,122 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
     return info;
 }
 
-RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options) {
-    const auto start = std::chrono::steady_clock::now();
-    RunSummary summary;
-    summary.output = options.output ? *options.output
-                     : options.shard ? spec.output / shard_directory_name(*options.shard)
-                                     : spec.output;
+std::string rank_results_name(int rank) { return fmt::format("results.rank-{}.jsonl", rank); }
+
+std::vector<std::string> fold_rank_results(const fs::path& output) {
+    std::vector<std::string> notes;
+    std::vector<fs::path> rank_files;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(output, ec)) {
+        const auto name = entry.path().filename().string();
+        if (name.starts_with("results.rank-") && name.ends_with(".jsonl")) rank_files.push_back(entry.path());
+    }
+    if (rank_files.empty()) return notes;
+    std::sort(rank_files.begin(), rank_files.end());
+    const fs::path results_path = output / "results.jsonl";
+    std::set<TrialKey> kept;
+    if (fs::exists(results_path, ec)) {
+        drop_incomplete_last_line(results_path);
+        for (const auto& r : read_results(results_path).records) kept.emplace(r.optimizer, r.problem, r.trial);
+    }
+    std::size_t joined = 0, twice = 0;
+    {
+        ResultsWriter writer(results_path);
+        for (const auto& file : rank_files) {
+            auto loaded = read_results(file);
+            for (const auto& note : loaded.notes) notes.push_back(file.string() + ": " + note);
+            for (const auto& r : loaded.records) {
+                if (!kept.emplace(r.optimizer, r.problem, r.trial).second) {
+                    ++twice;
+                    continue;
+                }
+                writer.append(r);
+                ++joined;
+            }
+        }
+    }
+    // Only now: a kill before this point leaves the rank files, and the next fold skips what was joined.
+    for (const auto& file : rank_files) fs::remove(file, ec);
+    notes.push_back(fmt::format("joined {} records from {} rank file(s) of an earlier distributed run{}", joined, rank_files.size(),
+                                twice ? fmt::format(" ({} already held, kept once)", twice) : std::string()));
+    return notes;
+}
+
+PreparedRun prepare_run(const ExperimentSpec& spec, const RunOptions& options, int ranks) {
+    PreparedRun prepared;
+    prepared.output = options.output ? *options.output
+                      : options.shard ? spec.output / shard_directory_name(*options.shard)
+                                      : spec.output;
     // One measurement read and one set of statistics per problem variant, shared by all its trials.
-    const auto shared = std::make_shared<SharedProblemData>();
-    summary.info = describe_experiment(spec, shared);
-    summary.info.shard = options.shard;
-    const fs::path results_path = summary.output / "results.jsonl";
+    prepared.shared = std::make_shared<SharedProblemData>();
+    prepared.info = describe_experiment(spec, prepared.shared);
+    prepared.info.shard = options.shard;
+    const fs::path results_path = prepared.output / "results.jsonl";
 
     std::error_code ec;
-    fs::create_directories(summary.output, ec);
-    if (ec || !fs::is_directory(summary.output))
-        throw InputError(summary.output.string(), 0, "output", "cannot create the output directory: " +
-                                                                   (ec ? ec.message() : std::string("not a directory")));
+    fs::create_directories(prepared.output, ec);
+    if (ec || !fs::is_directory(prepared.output))
+        throw InputError(prepared.output.string(), 0, "output", "cannot create the output directory: " +
+                                                                    (ec ? ec.message() : std::string("not a directory")));
+    // Records a killed distributed run left in its ranks' files belong to it, resumed or kept aside.
+    prepared.notes = fold_rank_results(prepared.output);
 
-    std::set<std::tuple<std::string, std::string, std::int64_t>> done;
     const bool earlier_results = fs::file_size(results_path, ec) > 0 && !ec;
-    const bool earlier_info = fs::exists(summary.output / "experiment.json", ec);
+    const bool earlier_info = fs::exists(prepared.output / "experiment.json", ec);
     const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     if (earlier_results || earlier_info) {
         if (options.resume) {
             if (earlier_info) {
-                const auto earlier = read_experiment_info(summary.output);
-                check_resumable(spec, earlier, summary.output, options.shard);
+                const auto earlier = read_experiment_info(prepared.output);
+                check_resumable(spec, earlier, prepared.output, options.shard);
                 // The trials kept came from the earlier runs: their provenance stays beside this one's.
-                if (earlier_results) summary.info.runs = earlier.runs;
+                if (earlier_results) prepared.info.runs = earlier.runs;
             }
             if (earlier_results) {
                 drop_incomplete_last_line(results_path);
                 auto loaded = read_results(results_path);
-                summary.notes = loaded.notes;
-                for (const auto& r : loaded.records) done.emplace(r.optimizer, r.problem, r.trial);
+                prepared.notes.insert(prepared.notes.end(), loaded.notes.begin(), loaded.notes.end());
+                for (const auto& r : loaded.records) prepared.done.emplace(r.optimizer, r.problem, r.trial);
             }
         } else if (earlier_results) {
-            const fs::path kept = keep_previous_run(summary.output);
-            summary.notes.push_back("the earlier run's results and experiment.json are kept in " + kept.string() +
-                                    " (use --resume to continue a run instead)");
+            const fs::path kept = keep_previous_run(prepared.output);
+            prepared.notes.push_back("the earlier run's results and experiment.json are kept in " + kept.string() +
+                                     " (use --resume to continue a run instead)");
         }
     }
-    summary.info.runs.push_back(current_provenance(threads));
-    write_experiment_info(summary.output, summary.info);
+    auto provenance = current_provenance(threads);
+    provenance.ranks = ranks;
+    prepared.info.runs.push_back(provenance);
+    write_experiment_info(prepared.output, prepared.info);
+    return prepared;
+}
+
+PreparedRun attach_to_run(const ExperimentSpec& spec, const RunOptions& options) {
+    PreparedRun prepared;
+    prepared.output = options.output ? *options.output : spec.output;
+    prepared.shared = std::make_shared<SharedProblemData>();
+    prepared.info = describe_experiment(spec, prepared.shared);
+    std::error_code ec;
+    if (fs::exists(prepared.output / "results.jsonl", ec))
+        for (const auto& r : read_results(prepared.output / "results.jsonl").records) prepared.done.emplace(r.optimizer, r.problem, r.trial);
+    return prepared;
+}
+
+RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options) {
+    const auto prepared = prepare_run(spec, options);
+    return run_prepared(spec, options, prepared, options.shard, prepared.output / "results.jsonl");
+}
+
+RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, const PreparedRun& prepared,
+                        const std::optional<Shard>& share, const fs::path& results_path) {
+    const auto start = std::chrono::steady_clock::now();
+    RunSummary summary;
+    summary.output = prepared.output;
+    summary.info = prepared.info;
+    summary.notes = prepared.notes;
+    const auto& done = prepared.done;
+    const auto& shared = prepared.shared;
+    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     ResultsWriter writer(results_path);
 
     struct Task {
@@ -279,7 +351,7 @@ RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options)
     for (std::size_t p = 0; p < spec.problems.size(); ++p)
         for (std::size_t o = 0; o < spec.optimizers.size(); ++o)
             for (std::int64_t t = 0; t < spec.trials; ++t, ++position) {
-                if (options.shard && !options.shard->holds(position)) continue;
+                if (share && !share->holds(position)) continue;
                 ++summary.total;
                 if (done.count({spec.optimizers[o].label, spec.problems[p].label, t})) {
                     ++summary.skipped;

@@ -4,13 +4,17 @@
 // identical whatever the thread count or order; each finished trial is appended to results.jsonl at
 // once.
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "framework/experiment_config.hpp"
 #include "framework/problem.hpp"
 #include "framework/results_store.hpp"
+#include "framework/shared_problem_data.hpp"
 
 namespace mhb {
 
@@ -38,6 +42,32 @@ struct RunSummary {
 ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<SharedProblemData> shared = nullptr);
 
 RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options);
+
+// run_experiment in two steps, for runs spread over processes (framework/mpi/distributed_run.cpp):
+// one process prepares the output, then every process runs its share of the trials into a results
+// file of its own, and the first joins those files.
+using TrialKey = std::tuple<std::string, std::string, std::int64_t>;  // optimizer label, problem label, trial
+struct PreparedRun {
+    std::filesystem::path output;
+    ExperimentInfo info;
+    std::set<TrialKey> done;  // trials already in results.jsonl (kept on --resume)
+    std::vector<std::string> notes;
+    std::shared_ptr<SharedProblemData> shared;
+};
+// Folds leftover rank files into results.jsonl, keeps an earlier run aside or checks it can be
+// resumed, and writes experiment.json (its provenance saying `ranks`).
+PreparedRun prepare_run(const ExperimentSpec& spec, const RunOptions& options, int ranks = 1);
+// What another process needs of a run that the first has prepared: the done trials, read back.
+PreparedRun attach_to_run(const ExperimentSpec& spec, const RunOptions& options);
+// Runs the trials of `share` (all when empty) not yet done, appending each record to `results`.
+RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, const PreparedRun& prepared,
+                        const std::optional<Shard>& share, const std::filesystem::path& results);
+// "results.rank-3.jsonl": where rank 3 of a distributed run writes its records.
+std::string rank_results_name(int rank);
+// Appends the records of every results.rank-*.jsonl in `output` that results.jsonl does not hold yet
+// (a record twice is kept once; a record cut short by a kill is dropped, to be rerun), then removes
+// those files. Returns notes on what it found.
+std::vector<std::string> fold_rank_results(const std::filesystem::path& output);
 
 // "shard-2-of-8": the directory a shard writes into under the experiment's output by default.
 std::string shard_directory_name(const Shard& shard);

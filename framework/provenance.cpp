@@ -38,12 +38,13 @@ std::vector<std::pair<std::string, std::string>> provenance_lines(const Provenan
             {"commit", p.commit},
             {"date", p.date},
             {"machine", fmt::format("{} ({}, {} hardware threads)", p.host, p.system, p.hardware_threads)},
-            {"threads", std::to_string(p.threads)}};
+            {"threads", p.ranks > 1 ? fmt::format("{} per rank, {} MPI ranks", p.threads, p.ranks) : std::to_string(p.threads)}};
 }
 
 std::string provenance_summary(const Provenance& p) {
-    return fmt::format("{} on {} ({}, {} hardware threads), {} threads, mhbench {} at commit {}", p.date, p.host, p.system,
-                       p.hardware_threads, p.threads, p.version, p.commit);
+    return fmt::format("{} on {} ({}, {} hardware threads), {}{} threads, mhbench {} at commit {}", p.date, p.host, p.system,
+                       p.hardware_threads, p.ranks > 1 ? fmt::format("{} MPI ranks x ", p.ranks) : std::string(), p.threads,
+                       p.version, p.commit);
 }
 
 }  // namespace mhb

@@ -15,7 +15,8 @@ struct Provenance {
     std::string host;     // the machine's host name
     std::string system;   // operating system, its release and the processor architecture (uname)
     unsigned hardware_threads = 0;
-    int threads = 0;      // worker threads used
+    int threads = 0;      // worker threads used (per rank under MPI)
+    int ranks = 1;        // MPI processes the trials were spread over
 };
 
 // This process, now, using `threads` worker threads.

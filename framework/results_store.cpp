@@ -105,7 +105,7 @@ json provenance_json(const Provenance& p) {
     return {{"mhbench_version", p.version}, {"commit", p.commit},
             {"started", p.date},            {"host", p.host},
             {"system", p.system},           {"hardware_threads", p.hardware_threads},
-            {"threads", p.threads}};
+            {"threads", p.threads},         {"ranks", p.ranks}};
 }
 Provenance provenance_from(const json& j) {
     Provenance p;
@@ -116,6 +116,7 @@ Provenance provenance_from(const json& j) {
     p.system = j.at("system");
     p.hardware_threads = j.at("hardware_threads");
     p.threads = j.at("threads");
+    p.ranks = j.value("ranks", 1);
     return p;
 }
 

@@ -3,6 +3,8 @@
 // run must give whatever its thread count, interruptions or division into shards (time aside).
 #include <catch2/catch.hpp>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 #include <tuple>
@@ -34,6 +36,18 @@ inline void require_same_results(const std::vector<TrialRecord>& a, const std::v
         REQUIRE(ra.evaluations == rb.evaluations);
         REQUIRE(ra.iterations == rb.iterations);
     }
+}
+
+// table.csv of a results directory without its two run-time columns, the only fields a run's
+// timing changes.
+inline std::string table_csv_without_time(const std::filesystem::path& directory) {
+    std::ifstream in(directory / "table.csv");
+    std::string line, out;
+    while (std::getline(in, line)) {
+        for (int drop = 0; drop < 2; ++drop) line.erase(line.find_last_of(','));
+        out += line + "\n";
+    }
+    return out;
 }
 
 }  // namespace mhb::testing

@@ -38,17 +38,10 @@ RunSummary run_share(const ExperimentSpec& spec, const fs::path& out, std::optio
     return run_experiment(spec, options);
 }
 
-// table.csv without its two time columns (the only fields a run's timing changes).
+// The tables remade from the directory's records, without the time columns.
 std::string table_without_time(const fs::path& directory) {
-    const auto info = read_experiment_info(directory);
-    write_tables(directory, info, read_results(directory / "results.jsonl").records);
-    std::ifstream in(directory / "table.csv");
-    std::string line, out;
-    while (std::getline(in, line)) {
-        for (int drop = 0; drop < 2; ++drop) line.erase(line.find_last_of(','));
-        out += line + "\n";
-    }
-    return out;
+    write_tables(directory, read_experiment_info(directory), read_results(directory / "results.jsonl").records);
+    return testing::table_csv_without_time(directory);
 }
 
 std::string merge_error(const std::vector<fs::path>& dirs, const fs::path& out) {

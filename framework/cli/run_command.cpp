@@ -9,7 +9,12 @@
 #include "framework/cli/commands.hpp"
 #include "framework/cli/option_ranges.hpp"
 #include "framework/experiment_report.hpp"
+#include "framework/distributed_launch.hpp"
 #include "framework/experiment_runner.hpp"
+#include "framework/input_error.hpp"
+#ifdef MHBENCH_WITH_MPI
+#include "framework/mpi/distributed_run.hpp"
+#endif
 #include "framework/plots.hpp"
 #include "framework/report_tables.hpp"
 #include "framework/shard_merge.hpp"
@@ -85,17 +90,38 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
     cmd->add_flag("--resume", a->resume, "keep the trials already in the output's results.jsonl and run only the missing ones");
     cmd->add_flag("--no-plots", a->no_plots, "write tables only");
     cmd->add_flag("--quiet", a->quiet, "do not print the tables");
-    return std::function<int()>([a] {
+    auto action = [a]() -> int {
         const auto spec = load_experiment(a->file);
         RunOptions options;
         options.threads = a->threads;
         options.resume = a->resume;
         if (!a->out.empty()) options.output = fs::path(a->out);
         if (!a->shard.empty()) options.shard = parse_shard(a->shard);
-        if (!a->quiet)
+        if (!a->quiet && launched_rank() == 0)
             std::fprintf(stderr, "Running %s: %zu optimizer(s) x %zu problem(s) x %lld trials\n", spec.name.c_str(),
                          spec.optimizers.size(), spec.problems.size(), static_cast<long long>(spec.trials));
-        const auto summary = run_experiment(spec, options);
+        RunSummary summary;
+        if (launched_ranks() > 1) {
+#ifdef MHBENCH_WITH_MPI
+            DistributedOutcome outcome;
+            try {
+                outcome = run_distributed(spec, options);
+            } catch (const RunStoppedOnAnotherRank&) {
+                return exit_bad_input;
+            }
+            if (!outcome.summary) return exit_ok;  // rank 0 reports for all
+            summary = std::move(*outcome.summary);
+            std::fprintf(stderr, "Spread over %d MPI ranks.\n", outcome.ranks);
+#else
+            throw InputError("command line", 0, "mpirun",
+                             fmt::format("started as one of {} MPI processes, but this mhbench was built without MPI, so "
+                                         "every process would run every trial; install libopenmpi-dev and libboost-mpi-dev "
+                                         "and rebuild, or divide the trials with --shard K/N (docs/campaigns.md)",
+                                         launched_ranks()));
+#endif
+        } else {
+            summary = run_experiment(spec, options);
+        }
         for (const auto& note : summary.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
         publish(summary.output, !a->no_plots, a->quiet);
         std::fprintf(stderr, "%zu trials run, %zu skipped (already done), %zu failed, in %.3f s wall time.\n", summary.ran,
@@ -111,6 +137,17 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
             return exit_bad_input;
         }
         return exit_ok;
+    };
+    return std::function<int()>([action] {
+        if (launched_ranks() > 1 && launched_rank() != 0) {
+            // Under mpirun every rank reads the config; rank 0 alone says what is wrong, once.
+            try {
+                return action();
+            } catch (const std::exception&) {
+                return exit_bad_input;
+            }
+        }
+        return action();
     });
 });
 
