@@ -134,8 +134,8 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                                         ? fmt::format("{} x dimension", info.evaluations_per_dimension)
                                         : fmt::format("{}", info.budget.max_evaluations);
     const bool evaluation_limit = info.budget.max_evaluations > 0 || info.evaluations_per_dimension > 0;
-    md += fmt::format("Config `{}`; {} trials per pair; master seed {}; budget: {}.\n\n",
-                      std::filesystem::path(info.config_file).filename().string(), info.trials, info.seed,
+    md += fmt::format("Config `{}`; {} trial{} per pair; master seed {}; budget: {}.\n\n",
+                      std::filesystem::path(info.config_file).filename().string(), info.trials, info.trials == 1 ? "" : "s", info.seed,
                       evaluation_limit ? (info.budget.max_iterations > 0 ? fmt::format("{} iterations or {} evaluations, whichever first",
                                                                                        info.budget.max_iterations, evaluations)
                                                                          : fmt::format("{} function evaluations", evaluations))
