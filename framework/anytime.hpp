@@ -14,6 +14,9 @@ struct AnytimeSpec {
     std::vector<double> ert_targets;  // those of `targets` the ERT table shows
     int points_per_decade = 5;        // best-so-far checkpoints per decade of evaluations; 0: none
     int bootstrap = 1000;             // resamples for the confidence intervals
+    // false: a trial keeps only its final state as its convergence trace (no entry per iteration),
+    // which is most of a campaign's records; the anytime record replaces it.
+    bool iteration_trace = true;
     bool operator==(const AnytimeSpec&) const = default;
 };
 

@@ -199,8 +199,9 @@ AnytimeSpec read_anytime(const ConfigReader& reader, const toml::node& node) {
     const long line = line_of(node);
     for (const auto& [k, v] : *table) {
         const std::string key(k.str());
-        if (key != "targets" && key != "ert_targets" && key != "points_per_decade" && key != "bootstrap")
-            reader.fail(line_of(v), "anytime." + key, "unknown key; expected targets, ert_targets, points_per_decade or bootstrap");
+        if (key != "targets" && key != "ert_targets" && key != "points_per_decade" && key != "bootstrap" && key != "iteration_trace")
+            reader.fail(line_of(v), "anytime." + key,
+                        "unknown key; expected targets, ert_targets, points_per_decade, bootstrap or iteration_trace");
     }
     AnytimeSpec spec;
     spec.targets = table->get("targets") ? read_targets(reader, *table->get("targets"), "anytime.targets") : bbob_targets();
@@ -224,6 +225,11 @@ AnytimeSpec read_anytime(const ConfigReader& reader, const toml::node& node) {
     spec.points_per_decade = static_cast<int>(reader.integer(*table, "points_per_decade", "anytime.points_per_decade", 0, 5, line, false, 100));
     spec.bootstrap = static_cast<int>(reader.integer(*table, "bootstrap", "anytime.bootstrap", 0, 1000, line, false, 100'000,
                                                      ": each resample recomputes every ERT and ECDF"));
+    if (const auto* trace = table->get("iteration_trace")) {
+        const auto b = trace->as_boolean();
+        if (!b) reader.fail(line_of(*trace), "anytime.iteration_trace", "expects true or false");
+        spec.iteration_trace = b->get();
+    }
     return spec;
 }
 

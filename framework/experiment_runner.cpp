@@ -382,6 +382,7 @@ RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, c
                 if (spec.evaluations_per_dimension > 0)
                     setup.budget.max_evaluations = spec.evaluations_per_dimension * problem->dimension();
                 if (spec.anytime) {
+                    setup.record_trace = spec.anytime->iteration_trace;
                     setup.anytime = &*spec.anytime;
                     setup.optimum = *problem->truth().optimum_value;
                 }

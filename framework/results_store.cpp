@@ -223,7 +223,8 @@ json to_json(const ExperimentInfo& info) {
         out["anytime"] = {{"targets", info.anytime->targets},
                           {"ert_targets", info.anytime->ert_targets},
                           {"points_per_decade", info.anytime->points_per_decade},
-                          {"bootstrap", info.anytime->bootstrap}};
+                          {"bootstrap", info.anytime->bootstrap},
+                          {"iteration_trace", info.anytime->iteration_trace}};
     return out;
 }
 
@@ -244,7 +245,8 @@ ExperimentInfo experiment_from_json(const json& j) {
     if (j.contains("anytime")) {
         const auto& a = j["anytime"];
         info.anytime = AnytimeSpec{a.at("targets").get<std::vector<double>>(), a.at("ert_targets").get<std::vector<double>>(),
-                                   a.at("points_per_decade").get<int>(), a.at("bootstrap").get<int>()};
+                                   a.at("points_per_decade").get<int>(), a.at("bootstrap").get<int>(),
+                                   a.value("iteration_trace", true)};
     }
     info.trials = j.at("trials");
     info.seed = j.at("seed");

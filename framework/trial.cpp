@@ -22,6 +22,7 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     }
 
     auto record = [&] {
+        if (!setup.record_trace) return;
         rec.trace_evaluations.push_back(evaluator.evaluations());
         rec.trace_best.push_back(evaluator.best_fitness());
         if (setup.record_positions) rec.trace_position.push_back(evaluator.best_position());
@@ -31,8 +32,10 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     constexpr std::int64_t reserve_cap = 4096;
     const auto reserve = static_cast<std::size_t>(
         setup.budget.max_iterations > 0 ? std::min(setup.budget.max_iterations, reserve_cap - 1) + 1 : 256);
-    rec.trace_evaluations.reserve(reserve);
-    rec.trace_best.reserve(reserve);
+    if (setup.record_trace) {
+        rec.trace_evaluations.reserve(reserve);
+        rec.trace_best.reserve(reserve);
+    }
 
     try {
         optimizer.initialize(evaluator, rng);
@@ -63,6 +66,11 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     rec.best_fitness = evaluator.best_fitness();
     rec.best_position = evaluator.best_position();
     rec.evaluations = evaluator.evaluations();
+    if (!setup.record_trace) {
+        rec.trace_evaluations.assign(1, rec.evaluations);
+        rec.trace_best.assign(1, rec.best_fitness);
+        if (setup.record_positions) rec.trace_position.assign(1, rec.best_position);
+    }
     if (anytime) rec.anytime = anytime->take();
     rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return rec;

@@ -37,6 +37,8 @@ struct TrialSetup {
     Budget budget;
     std::uint64_t seed = 0;
     bool record_positions = false;
+    // false: the trace holds the final state only (see AnytimeSpec::iteration_trace).
+    bool record_trace = true;
     // Record anytime data against this optimum (f*); null: none.
     const AnytimeSpec* anytime = nullptr;
     double optimum = 0.0;

@@ -95,6 +95,18 @@ TEST_CASE("a trial's anytime record equals the replay of every evaluation, for w
             CHECK(rec.anytime.best[c] == best_after[static_cast<std::size_t>(rec.anytime.evaluations[c] - 1)]);
         CHECK(rec.anytime.evaluations.back() == 1585);  // the last checkpoint within 2503
 
+        // Without the per-iteration trace: the same anytime record, and the final state as the trace.
+        testing::RecordingSphere again_problem(4, -5.0, 5.0, 1.5);
+        auto again_optimizer = make_optimizer(name, values);
+        setup.record_trace = false;
+        const auto lean = run_trial(*again_optimizer, again_problem, setup);
+        CHECK(lean.anytime.hits == rec.anytime.hits);
+        CHECK(lean.anytime.best == rec.anytime.best);
+        CHECK(lean.best_fitness == rec.best_fitness);
+        CHECK(lean.trace_evaluations == std::vector<std::int64_t>{2503});
+        CHECK(lean.trace_best == std::vector<double>{rec.best_fitness});
+        CHECK(rec.trace_best.size() > 10);
+
         // Through JSON and back, bit for bit.
         const auto again = trial_from_json(nlohmann::json::parse(to_json(rec).dump()));
         CHECK(again.anytime.evaluations == rec.anytime.evaluations);
@@ -132,6 +144,9 @@ TEST_CASE("[anytime] in a config: defaults, lists, and refusals that name the li
     CHECK(listed->targets == std::vector<double>{1.0, 1e-1, 1e-3});  // sorted, duplicates dropped
     CHECK(listed->ert_targets == std::vector<double>{1.0});
     CHECK(listed->points_per_decade == 2);
+    CHECK(listed->iteration_trace);
+    CHECK_FALSE(load("[anytime]\niteration_trace = false\n").anytime->iteration_trace);
+    CHECK_THAT(error("[anytime]\niteration_trace = 0\n"), Catch::Contains("a.toml:4: anytime.iteration_trace: expects true or false"));
 
     CHECK_THAT(error("[anytime]\ntargets = [1, -2]\n"), Catch::Contains("a.toml:4: anytime.targets: expects positive finite numbers"));
     CHECK_THAT(error("[anytime]\ntargets = \"coco\"\n"), Catch::Contains("anytime.targets: expects \"bbob\" or a list"));
