@@ -38,8 +38,12 @@ void build_against_installed(const fs::path& prefix, const fs::path& source, con
     const auto install = run({MHBENCH_CMAKE, "--install", MHBENCH_BUILD_DIR, "--prefix", prefix.string()}, logs / "install.log");
     INFO(install.output);
     REQUIRE(install.exit_code == 0);
+    // The program's own compile flags: a plugin of a sanitizer build must be instrumented too (an
+    // uninstrumented destructor freeing what the instrumented program allocated is reported as a bad free).
     const auto configure = run({MHBENCH_CMAKE, "-S", source.string(), "-B", build.string(), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-                                "-DCMAKE_PREFIX_PATH=" + prefix.string(), "-DCMAKE_CXX_COMPILER=" MHBENCH_CXX_COMPILER},
+                                "-DCMAKE_PREFIX_PATH=" + prefix.string(), "-DCMAKE_CXX_COMPILER=" MHBENCH_CXX_COMPILER,
+                                "-DCMAKE_CXX_FLAGS=" MHBENCH_CXX_FLAGS, "-DCMAKE_MODULE_LINKER_FLAGS=" MHBENCH_SHARED_LINKER_FLAGS,
+                                "-DCMAKE_SHARED_LINKER_FLAGS=" MHBENCH_SHARED_LINKER_FLAGS},
                                logs / "configure.log");
     INFO(configure.output);
     REQUIRE(configure.exit_code == 0);
