@@ -271,11 +271,15 @@ void write_ecdf_plots(const fs::path& directory, const fs::path& data_dir, const
     const auto dimensions = dimensions_of(functions);
     for (int d : dimensions) {
         std::vector<const AnytimeFunction*> of_dimension;
-        std::int64_t longest = 1;
+        std::int64_t longest = 1;  // of this dimension's runs: budgets may scale with the dimension
         for (const auto& f : functions)
-            if (f.dimension == d) of_dimension.push_back(&f);
-        for (const auto& [key, list] : runs)
-            for (const auto* r : list) longest = std::max(longest, r->evaluations);
+            if (f.dimension == d) {
+                of_dimension.push_back(&f);
+                for (std::size_t p : f.problems)
+                    for (const auto& o : info.optimizers)
+                        if (auto it = runs.find({o.label, info.problems[p].label}); it != runs.end())
+                            for (const auto* r : it->second) longest = std::max(longest, r->evaluations);
+            }
         const auto budgets = budget_grid(d, longest);
         const fs::path data = data_dir / fmt::format("ecdf_D{}.dat", d);
         std::ofstream out(data);
