@@ -16,14 +16,19 @@ struct CliRun {
     std::string output;  // stdout and stderr
 };
 
-inline CliRun run_mhbench(const std::vector<std::string>& arguments, const std::filesystem::path& log) {
-    std::vector<std::string> argv{MHBENCH_CLI};
-    argv.insert(argv.end(), arguments.begin(), arguments.end());
+// Any program (cmake, mpirun, an installed mhbench), `argv[0]` searched on PATH.
+inline CliRun run_command(const std::vector<std::string>& argv, const std::filesystem::path& log) {
     const auto outcome = run_program(argv, std::nullopt, log);
     std::ifstream in(log);
     std::stringstream text;
     text << in.rdbuf();
     return {outcome.started ? outcome.exit_code : -1, text.str()};
+}
+
+inline CliRun run_mhbench(const std::vector<std::string>& arguments, const std::filesystem::path& log) {
+    std::vector<std::string> argv{MHBENCH_CLI};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    return run_command(argv, log);
 }
 
 // `arguments` split at blanks; single quotes keep a blank inside one argument (as in a shell, but

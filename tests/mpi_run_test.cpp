@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "framework/experiment_runner.hpp"
-#include "framework/process.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/same_results.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -38,18 +38,8 @@ name = "bbob_f8"
 dimension = 4
 )";
 
-struct Outcome {
-    int exit_code;
-    std::string output;
-};
-
-Outcome run(std::vector<std::string> argv, const fs::path& log) {
-    const auto outcome = run_program(argv, std::nullopt, log);
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    return {outcome.started ? outcome.exit_code : -1, text.str()};
-}
+using Outcome = testing::CliRun;
+const auto run = testing::run_command;
 
 // mpirun as CI runs it: as root, more ranks than cores, and without the kernel's cross-memory
 // attach, which containers often forbid.

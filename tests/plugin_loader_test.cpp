@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "framework/plugin_loader.hpp"
-#include "framework/process.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
@@ -20,18 +20,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-    int exit_code;
-    std::string output;
-};
-
-Outcome run(const std::vector<std::string>& argv, const fs::path& log) {
-    const auto outcome = run_program(argv, std::nullopt, log);
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    return {outcome.started ? outcome.exit_code : -1, text.str()};
-}
+using Outcome = testing::CliRun;
+const auto run = testing::run_command;
 
 // Installs this build into `prefix` and builds the CMake project in `source` against it, in `build`.
 void build_against_installed(const fs::path& prefix, const fs::path& source, const fs::path& build, const fs::path& logs) {
