@@ -350,7 +350,7 @@ TEST_CASE("mhbench diagnose --report writes report.html that renders in headless
     CHECK(plots == 9);
     const std::string dom = rendered_dom(page, dir.path());
     check_dom(html, dom, tables, plots);
-    // The fitted model's colour in problems/pmsm/diagnosis_report.cpp.
+    // The fitted model's colour in problems/pmsm/report/diagnosis_report.cpp.
     check_drawn(screenshot(page, dir.path() / "diagnosis-report.png", {0x1b, 0x6f, 0xb5}));
 }
 

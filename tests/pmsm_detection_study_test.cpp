@@ -6,8 +6,8 @@
 #include <toml++/toml.h>
 
 #include "framework/input_error.hpp"
-#include "problems/pmsm/detection_study.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/study/detection_study.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;

@@ -9,7 +9,7 @@
 #include <Eigen/Dense>
 
 #include "framework/input_error.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/pmsm_fixture.hpp"
 
 using namespace mhb;

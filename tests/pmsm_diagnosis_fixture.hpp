@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "problems/pmsm/diagnosis.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/diagnosis/diagnosis.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/mhbench_cli.hpp"
 
 namespace mhb::pmsm::testing {

@@ -4,8 +4,8 @@
 #include <numbers>
 #include <vector>
 
-#include "problems/pmsm/drive_simulator.hpp"
-#include "problems/pmsm/steady_state_model.hpp"
+#include "problems/pmsm/simulation/drive_simulator.hpp"
+#include "problems/pmsm/model/steady_state_model.hpp"
 
 namespace mhb::pmsm::testing {
 

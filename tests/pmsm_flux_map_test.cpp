@@ -7,8 +7,8 @@
 
 #include "framework/input_error.hpp"
 #include "framework/random.hpp"
-#include "problems/pmsm/flux_map.hpp"
-#include "problems/pmsm/linear_fit.hpp"
+#include "problems/pmsm/machine/flux_map.hpp"
+#include "problems/pmsm/fit/linear_fit.hpp"
 #include "tests/pmsm_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 

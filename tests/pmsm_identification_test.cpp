@@ -11,9 +11,9 @@
 #include "framework/optimizer.hpp"
 #include "framework/random.hpp"
 #include "framework/registry.hpp"
-#include "problems/pmsm/base_model_fit.hpp"
-#include "problems/pmsm/measurement.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/fit/base_model_fit.hpp"
+#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/pmsm_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 

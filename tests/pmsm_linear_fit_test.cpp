@@ -4,7 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include "framework/random.hpp"
-#include "problems/pmsm/linear_fit.hpp"
+#include "problems/pmsm/fit/linear_fit.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;

@@ -14,8 +14,8 @@
 #include <nlohmann/json.hpp>
 
 #include "framework/input_error.hpp"
-#include "problems/pmsm/column_map.hpp"
-#include "problems/pmsm/measurement.hpp"
+#include "problems/pmsm/data/column_map.hpp"
+#include "problems/pmsm/data/measurement.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 

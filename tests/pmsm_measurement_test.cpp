@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 
 #include "framework/input_error.hpp"
-#include "problems/pmsm/measurement.hpp"
-#include "problems/pmsm/text_file.hpp"
+#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/data/text_file.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;

@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "framework/input_error.hpp"
-#include "problems/pmsm/base_model_fit.hpp"
-#include "problems/pmsm/model_fit.hpp"
+#include "problems/pmsm/fit/base_model_fit.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/pmsm_fixture.hpp"
 #include "tests/temporary_directory.hpp"

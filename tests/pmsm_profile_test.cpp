@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "framework/input_error.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "problems/pmsm/measurement.hpp"
+#include "problems/pmsm/data/measurement.hpp"
 #include "tests/mhbench_cli.hpp"
 #include "tests/temporary_directory.hpp"
 

@@ -11,8 +11,8 @@
 #include <tbb/task_arena.h>
 
 #include "framework/random.hpp"
-#include "problems/pmsm/model_fit.hpp"
-#include "problems/pmsm/steady_state_model.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/model/steady_state_model.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 
 using namespace mhb;

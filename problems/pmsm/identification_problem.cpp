@@ -11,9 +11,9 @@
 
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
-#include "problems/pmsm/base_model_fit.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
-#include "problems/pmsm/steady_state_model.hpp"
+#include "problems/pmsm/fit/base_model_fit.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
+#include "problems/pmsm/model/steady_state_model.hpp"
 
 namespace mhb::pmsm {
 namespace {

@@ -7,8 +7,8 @@
 #include "framework/optimizer.hpp"
 #include "framework/random.hpp"
 #include "framework/registry.hpp"
-#include "problems/pmsm/base_model_fit.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/fit/base_model_fit.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/temporary_directory.hpp"
 
 namespace {

@@ -11,9 +11,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include "problems/pmsm/diagnosis.hpp"
-#include "problems/pmsm/model_fit.hpp"
-#include "problems/pmsm/simulation_profile.hpp"
+#include "problems/pmsm/diagnosis/diagnosis.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/temporary_directory.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-// libFuzzer harness: the measurement CSV (problems/pmsm/measurement.hpp).
+// libFuzzer harness: the measurement CSV (problems/pmsm/data/measurement.hpp).
 // Build and run: docs/fuzzing.md.
 #include "tests/fuzz/input_formats.hpp"
 

@@ -1,4 +1,4 @@
-// libFuzzer harness: the model spec such as base+delay(tau=150e-6) (problems/pmsm/model_spec.hpp).
+// libFuzzer harness: the model spec such as base+delay(tau=150e-6) (problems/pmsm/model/model_spec.hpp).
 // Build and run: docs/fuzzing.md.
 #include "tests/fuzz/input_formats.hpp"
 

@@ -1,4 +1,4 @@
-// libFuzzer harness: the simulation profile (problems/pmsm/simulation_profile.hpp), parsed but never simulated.
+// libFuzzer harness: the simulation profile (problems/pmsm/simulation/simulation_profile.hpp), parsed but never simulated.
 // Build and run: docs/fuzzing.md.
 #include "tests/fuzz/input_formats.hpp"
 

@@ -1,9 +1,5 @@
 #include "problems/pmsm/effects/effect.hpp"
 
-#include <fmt/format.h>
-
-#include "framework/input_error.hpp"
-
 namespace mhb::pmsm {
 
 namespace {
@@ -37,19 +33,6 @@ Effect::Effect(std::string name, const ParameterSet& settings) : name_(std::move
 std::unique_ptr<Effect> make_effect(const std::string& name, const std::map<std::string, ParameterValue>& values) {
     const auto& entry = EffectRegistry::instance().at(name, "effect");
     return entry.create(ParameterSet(entry.parameters, values));
-}
-
-void require_columns(const Effect& effect, const Measurement& data) {
-    for (const auto& column : effect.model_columns()) {
-        const bool present = column == "theta_e"        ? data.theta_e.has_value()
-                             : column == "temp_winding" ? data.temp_winding.has_value()
-                             : column == "temp_magnet"  ? data.temp_magnet.has_value()
-                             : column == "t"            ? data.t.has_value()
-                                                        : true;
-        if (!present)
-            throw InputError(data.source, 0, column,
-                             fmt::format("the {} effect needs this column, which the data lack", effect.name()));
-    }
 }
 
 }  // namespace mhb::pmsm

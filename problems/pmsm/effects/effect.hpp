@@ -21,8 +21,7 @@
 
 #include "framework/parameters.hpp"
 #include "framework/registry.hpp"
-#include "problems/pmsm/machine.hpp"
-#include "problems/pmsm/measurement.hpp"
+#include "problems/pmsm/machine/machine.hpp"
 
 namespace mhb::pmsm {
 
@@ -158,8 +157,5 @@ inline bool register_effect(PluginEntry<EffectFactory> entry) { return EffectReg
 // Creates a registered effect with user values (ParameterError on bad values, UnknownPlugin on a
 // name that is not registered).
 std::unique_ptr<Effect> make_effect(const std::string& name, const std::map<std::string, ParameterValue>& values = {});
-
-// Throws InputError when `data` lacks a column the effect's model side needs.
-void require_columns(const Effect& effect, const Measurement& data);
 
 }  // namespace mhb::pmsm

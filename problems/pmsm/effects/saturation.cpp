@@ -12,7 +12,7 @@
 #include <fmt/format.h>
 
 #include "problems/pmsm/effects/effect.hpp"
-#include "problems/pmsm/flux_map.hpp"
+#include "problems/pmsm/machine/flux_map.hpp"
 
 namespace mhb::pmsm {
 namespace {

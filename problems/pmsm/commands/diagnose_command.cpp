@@ -1,0 +1,59 @@
+// `mhbench diagnose --data D.csv --model MODEL [--json OUT] [--report DIR]`: fits MODEL, then says
+// where it fails, which library effect is most likely missing and how sure that is
+// (docs/effects.md, "How diagnose decides"; docs/tutorial-missing-physics.md).
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "framework/cli/commands.hpp"
+#include "problems/pmsm/commands/model_command_options.hpp"
+#include "framework/file_output.hpp"
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/report/diagnosis_report.hpp"
+
+namespace mhb::cli {
+namespace {
+
+struct DiagnoseCommandOptions : ModelCommandOptions {
+    std::string report;
+};
+
+const bool registered = register_command("diagnose", [](CLI::App& app) {
+    auto* cmd = app.add_subcommand("diagnose", "Diagnose a PMSM model against measurements: where it fails, which effect is missing, how sure");
+    auto o = std::make_shared<DiagnoseCommandOptions>();
+    add_model_options(cmd, *o, "model to diagnose, e.g. base or base+deadtime (docs/effects.md)",
+                      "write the diagnosis as JSON here");
+    cmd->add_option("--report", o->report, "write report.md with PNG plots, and report.html (one page, plots inline), into this directory");
+    return std::function<int()>([o] {
+        const auto spec = pmsm::parse_model_spec(o->model);
+        check_optimizer_option(o->optimizer);
+        const auto columns = column_map_option(*o);
+        const auto threads = thread_limit(*o);
+        auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
+        pmsm::DiagnosisOptions options;
+        options.fit = fit_options(*o);
+        const auto diagnosis = pmsm::diagnose(data, spec, options);
+        fmt::print("{}", pmsm::diagnosis_text(diagnosis));
+        if (diagnosis.recommended.text() != spec.text())
+            fmt::print("\nnext: mhbench fit --data {}{} --model {}\n", shell_word(o->data), data_reading_options(*o),
+                       diagnosis.recommended.text());
+        if (!o->json.empty()) {
+            auto out = pmsm::diagnosis_json(diagnosis);
+            out["data"] = o->data;
+            replace_file(o->json, out.dump(2) + "\n");
+            fmt::print("\nJSON: {}\n", o->json);
+        }
+        if (!o->report.empty()) {
+            const auto outcome = pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data, data_reading_options(*o));
+            fmt::print("{}report: {} and {} ({} plots)\n", o->json.empty() ? "\n" : "", outcome.markdown.string(),
+                       outcome.html.string(), outcome.images.size());
+            for (const auto& note : outcome.notes) fmt::print("note: {}\n", note);
+        }
+        return exit_ok;
+    });
+});
+
+}  // namespace
+}  // namespace mhb::cli

@@ -1,0 +1,42 @@
+// `mhbench fit --data D.csv --model MODEL [--optimizer NAME] [--json OUT]`: identifies every parameter
+// of a model (base + effects, docs/effects.md) with 95 % intervals, and prints the residual rms of
+// u_d, u_q and combined, overall and per segment.
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "framework/cli/commands.hpp"
+#include "problems/pmsm/commands/model_command_options.hpp"
+#include "framework/file_output.hpp"
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/report/diagnosis_report.hpp"
+
+namespace mhb::cli {
+namespace {
+
+const bool registered = register_command("fit", [](CLI::App& app) {
+    auto* cmd = app.add_subcommand("fit", "Fit a PMSM model (base + effects) to measurements: parameters, 95 % intervals, residuals");
+    auto o = std::make_shared<ModelCommandOptions>();
+    add_model_options(cmd, *o, "model, e.g. base+deadtime+delay(tau=150e-6) (docs/effects.md)", "write the fit as JSON here");
+    return std::function<int()>([o] {
+        const auto spec = pmsm::parse_model_spec(o->model);
+        check_optimizer_option(o->optimizer);
+        const auto columns = column_map_option(*o);
+        const auto threads = thread_limit(*o);
+        const auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
+        const auto fit = pmsm::fit_model(data, spec, fit_options(*o));
+        fmt::print("{}", pmsm::fit_text(fit, data));
+        if (!o->json.empty()) {
+            auto out = pmsm::fit_json(fit);
+            out["data"] = o->data;
+            replace_file(o->json, out.dump(2) + "\n");
+            fmt::print("\nJSON: {}\n", o->json);
+        }
+        return exit_ok;
+    });
+});
+
+}  // namespace
+}  // namespace mhb::cli

@@ -1,0 +1,109 @@
+#pragma once
+// Options shared by the commands that fit a PMSM model to measurements (`fit`, `diagnose`).
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include "framework/cli/option_ranges.hpp"
+#include "framework/input_error.hpp"
+#include "framework/registry.hpp"
+#include "problems/pmsm/data/column_map.hpp"
+#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
+
+namespace mhb::cli {
+
+// Each fit evaluates the model over every sample, so this bounds a fit to hours, not weeks.
+inline constexpr std::int64_t max_fit_evaluations = 10'000'000;
+
+struct ModelCommandOptions {
+    std::string data, model = "base", json, optimizer = "cmaes";
+    std::string columns, columns_file;
+    int pole_pairs = 0;
+    double settle = 0.0;
+    std::int64_t evaluations = 0;
+    std::uint64_t seed = 1;
+    std::int64_t search_rows = pmsm::FitOptions{}.search_rows;
+    int threads = 0;
+};
+
+inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::string& model_help,
+                              const std::string& json_help) {
+    cmd->add_option("--data", o.data, "measurement file: CSV, MAT (v5, v7, v7.3) or HDF5 (docs/data-format.md)")->required();
+    cmd->add_option("--columns", o.columns,
+                    "the file's names and units for mhbench's columns, e.g. i_d=Id_meas[mA],omega_e=speed[rpm]");
+    cmd->add_option("--columns-file", o.columns_file, "the same map as a TOML file (docs/data-format.md)");
+    cmd->add_option("--pole-pairs", o.pole_pairs, "pole-pair count, converting a speed in rpm to electrical rad/s")
+        ->check(whole_number_in<int>(1, 1000));
+    cmd->add_option("--model", o.model, model_help);
+    cmd->add_option("--optimizer", o.optimizer, "optimizer searching the nonlinear effect parameters");
+    cmd->add_option("--evaluations", o.evaluations, "optimizer evaluations per fit (0: 150 + 50 per searched parameter)")
+        ->check(whole_number_in<std::int64_t>(0, max_fit_evaluations));
+    cmd->add_option("--seed", o.seed, "optimizer seed")
+        ->check(whole_number_in<std::uint64_t>(0, std::numeric_limits<std::uint64_t>::max()));
+    cmd->add_option("--settle", o.settle, "drop this many seconds after each segment start (needs t, segment)")
+        ->check(number_in(0.0, 1e6));
+    cmd->add_option("--search-rows", o.search_rows,
+                    "rows the optimiser searches on, a random subset of longer data (0: all); all rows are polished")
+        ->check(whole_number_in<std::int64_t>(0, pmsm::max_measurement_rows));
+    cmd->add_option("--threads", o.threads, "worker threads (default: all cores); results do not depend on it")
+        ->check(whole_number_in<int>(1, 4096));
+    cmd->add_option("--json", o.json, json_help);
+}
+
+// The fit settings of the options.
+inline pmsm::FitOptions fit_options(const ModelCommandOptions& o) {
+    pmsm::FitOptions options;
+    options.optimizer = o.optimizer;
+    options.evaluations = o.evaluations;
+    options.seed = o.seed;
+    options.search_rows = o.search_rows;
+    return options;
+}
+
+// Caps TBB's workers at --threads while it lives (no cap without the option).
+inline std::optional<tbb::global_control> thread_limit(const ModelCommandOptions& o) {
+    if (o.threads <= 0) return std::nullopt;
+    return std::make_optional<tbb::global_control>(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(o.threads));
+}
+
+// The column map of --columns, --columns-file and --pole-pairs, checked before any data is read.
+inline pmsm::ColumnMap column_map_option(const ModelCommandOptions& o) {
+    return pmsm::column_map_from_options(o.columns, o.columns_file, o.pole_pairs);
+}
+
+// `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.
+inline std::string shell_word(const std::string& text) {
+    const bool bare = !text.empty() && text.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                                              "0123456789_./=,:+-") == std::string::npos;
+    if (bare) return text;
+    std::string out = "'";
+    for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+// The options after --data's value that read the data as this command did, for the commands it
+// suggests next: " --columns ... --columns-file ... --pole-pairs N", or "" without a column map.
+inline std::string data_reading_options(const ModelCommandOptions& o) {
+    std::string out;
+    if (!o.columns.empty()) out += " --columns " + shell_word(o.columns);
+    if (!o.columns_file.empty()) out += " --columns-file " + shell_word(o.columns_file);
+    if (o.pole_pairs > 0) out += " --pole-pairs " + std::to_string(o.pole_pairs);
+    return out;
+}
+
+// The --optimizer value as a registered optimizer's name; a typo is refused naming the option and
+// the closest name, before any data is read.
+inline void check_optimizer_option(const std::string& name) {
+    try {
+        OptimizerRegistry::instance().at(name, "optimizer");
+    } catch (const UnknownPlugin& e) {
+        throw InputError("command line", 0, "--optimizer", e.what());
+    }
+}
+
+}  // namespace mhb::cli

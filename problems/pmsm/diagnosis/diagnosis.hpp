@@ -1,0 +1,189 @@
+#pragma once
+// Diagnosing a model against a measurement (docs/effects.md, "How diagnose decides"): where the
+// model fails, which library effect is most likely missing, and how sure that is.
+//
+//  - The noise: the long-run variance of each axis' residual within segments (AR(1)-prewhitened
+//    Newey-West, linear_fit.hpp), measured on the best-fitting model tried, so that hundreds of
+//    serially correlated samples per operating point count as what they are worth.
+//  - Each library effect whose columns are present is added to the model and fitted. Its evidence:
+//    the fall in residual; a likelihood ratio scaled by that long-run variance, and from it a BIC with
+//    the effective sample count; leave-one-segment-out prediction error; plausibility of the refitted
+//    values (inside the effect's declared range, base parameters physically possible).
+//  - Identifiability is judged on the design, not the noise: the data with each segment's currents and
+//    speed at their means (the logged angle and the temperature trend kept). An effect whose Jacobian
+//    columns lie in the span of the model's own there is absorbed without trace; hypothetical extra
+//    operating points show which experiment would reveal it.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "problems/pmsm/fit/model_fit.hpp"
+
+namespace mhb::pmsm {
+
+struct DiagnosisOptions {
+    FitOptions fit;
+    bool leave_one_out = true;  // leave-one-segment-out prediction (needs 3 segments or more)
+    int max_effects = 6;        // effects the search over sets may add to the model
+    // A set reaches the noise floor when its residual has no significant structure, or structure
+    // with less than this fraction of the noise power (the steady-state model's own error on effects
+    // that make the currents ripple, docs/effects.md).
+    double floor_tolerance = 0.25;
+};
+
+struct NoiseEstimate {
+    std::string model;                  // the fit it was measured on
+    Eigen::Vector2d sigma{0.0, 0.0};    // within-segment residual standard deviation per axis (V)
+    Eigen::Vector2d long_run{0.0, 0.0}; // long-run standard deviation per axis (V): sigma of a mean times sqrt(n)
+    double effective_samples = 0.0;     // both axes: sum of n sigma^2 / long_run^2
+    double dispersion = 1.0;            // lack of fit of that model's segment means per degree of freedom, at least 1
+};
+
+// A hypothetical operating point added to the design, and what it would do for an effect.
+struct Experiment {
+    std::string name;         // "the other direction"
+    std::string description;  // the operating point, in numbers
+    double unique_after = 0.0;  // unique fraction of the effect's signature with this point added
+};
+
+enum class Identifiability { Identifiable, MostlyAbsorbed, NotIdentifiable };
+const char* to_string(Identifiability level);
+
+// What an unidentifiable effect parameter does to the base parameters: pinned at a typical value
+// (its declared default, or 1 % of its range when that is zero) the base parameters shift while the
+// residual stays put; extrapolated, some base parameter reaches zero.
+struct Absorption {
+    std::string parameter;                 // effect.parameter
+    double typical = 0.0;
+    Eigen::Vector4d base_shift;            // relative change of Rs, Ld, Lq, psi_f from the model's fit
+    double rss_change = 0.0;               // in long-run noise variances
+    std::vector<std::pair<std::string, double>> impossible_from;  // base parameter, effect value where it reaches zero (inside the range)
+};
+
+// Partial: strong evidence and good prediction, but the values it takes alone are implausible: it
+// explains part of the excess residual while another effect is still missing (it biases the fit).
+enum class Verdict { Supported, Partial, Weak, NotSupported, Implausible, NotIdentifiable };
+const char* to_string(Verdict verdict);
+
+struct Candidate {
+    std::string effect;
+    ModelFit fit;                         // the model with this effect added
+    int added_parameters = 0;             // free parameters the effect adds
+    double likelihood_ratio = 0.0;        // sum over axes of (RSS_model - RSS_candidate) / long-run variance
+    double delta_bic = 0.0;               // -likelihood_ratio + added_parameters ln(effective samples)
+    std::optional<double> loso_rms;       // leave-one-segment-out prediction error (V)
+    int loso_better = 0, loso_segments = 0;  // held-out segments predicted better than by the model
+    bool plausible = true;
+    std::vector<std::string> implausible;  // why not
+    Identifiability identifiability = Identifiability::Identifiable;
+    double unique_fraction = 1.0;         // of its most distinct parameter's signature on the design
+    std::vector<Experiment> experiments;  // what would reveal it (when not clearly identifiable)
+    std::vector<Absorption> absorption;   // when not identifiable
+    Eigen::Vector4d base_shift;           // candidate's base parameters relative to the model's, minus 1
+    double explained = 0.0;               // fraction of the model's excess residual (over the noise floor) it removes
+    Verdict verdict = Verdict::NotSupported;
+};
+
+// One step of the search over sets of effects: the model after adding `added` to the previous step.
+struct PathStep {
+    ModelFit fit;
+    std::string added;                    // empty for the first step (the model diagnosed)
+    double delta_bic = 0.0;               // against the previous step (0 for the first)
+    double explained = 0.0;               // fraction of the first step's excess residual removed so far
+    bool plausible = true;                // the whole set's values (base and effects)
+    std::vector<std::string> implausible;
+    bool at_noise_floor = false;          // no lack of fit left, or less than the tolerance (DiagnosisOptions)
+    double structure = 0.0;               // power of the significant structure left, relative to the noise's
+    std::string signature;                // of that structure, in words (empty when none is significant)
+};
+
+struct NotTried {
+    std::string effect;
+    std::string column;  // the column the data lack
+};
+
+struct Harmonic {
+    int order = 0;                                  // of the electrical angle
+    Eigen::Vector2d amplitude{0.0, 0.0};            // V, d and q
+    double standard_error = 0.0;                    // V, of each amplitude component under noise alone
+    double p_value = 1.0;
+};
+
+struct LackOfFit {
+    bool means_available = false;  // more segment-mean equations than free parameters
+    double statistic = 0.0;        // sum over segments and axes of n_s mean^2 / long-run variance
+    int dof = 0;
+    double p_value = 1.0;
+    std::vector<Harmonic> harmonics;  // when theta_e is logged
+    bool significant = false;         // means or any harmonic beyond chance (p < 1e-3 after Bonferroni)
+    double structure = 0.0;           // power of the significant structure (means, harmonics) relative to the noise's
+    std::string signature;            // in words
+};
+
+struct ApparentValue {
+    double value = 0.0;
+    double standard_error = 0.0;
+    bool determined = false;  // the segment moves the prediction with this parameter
+};
+
+struct SegmentConditions {
+    std::string label;
+    Eigen::Index first = 0, rows = 0;
+    double omega = 0.0, i_d = 0.0, i_q = 0.0;             // means
+    std::optional<double> temp_winding, temp_magnet, time;  // means
+    SegmentResidual model, before;                        // the model's residual; the base model's when the model has effects
+    Eigen::Vector2d mean_standard_error{0.0, 0.0};        // of the mean residual under noise alone
+    std::vector<ApparentValue> apparent;                  // per free parameter of the model
+};
+
+// An apparent parameter that varies between segments beyond the noise, and the operating condition
+// it follows (|r| >= 0.8), if one does.
+struct Drift {
+    std::string parameter, variable;  // "Rs", "temp_winding"; variable empty: follows none alone
+    double correlation = 0.0;
+    double slope = 0.0;               // parameter unit per unit of the variable
+};
+
+struct Diagnosis {
+    std::string source;
+    Eigen::Index samples = 0;
+    std::vector<std::string> columns;  // optional columns present
+    ModelFit model;
+    std::vector<ModelFit> steps;       // base, base+A, ... up to the model (one entry when it is base)
+    NoiseEstimate noise;
+    LackOfFit lack_of_fit;             // of the model
+    std::optional<LackOfFit> after_winner;
+    std::vector<SegmentConditions> segments;
+    std::vector<std::string> apparent_names;
+    std::vector<Drift> drifts;
+    std::optional<double> model_loso_rms;
+    int mean_equations = 0;            // 2 x segments
+    bool base_plausible = true;
+    std::vector<std::string> base_problems;
+    std::vector<Candidate> candidates;  // ranked, best first
+    std::vector<NotTried> not_tried;
+    bool missing_effect_found = false;
+    std::optional<std::string> winner;   // the first effect of the recommended set (unless a tie)
+    std::vector<std::string> tie;        // effects the evidence cannot order (at the step where the search stopped)
+    std::vector<Experiment> tie_experiments;
+    bool not_in_library = false;
+    // The search over sets of effects (forward selection with backward pruning, docs/effects.md):
+    // the steps from the model diagnosed to the last set the evidence supports, the effects pruned
+    // again because the others explain them, and the recommendation: the last set when it reaches
+    // the noise floor with plausible values, the model diagnosed otherwise.
+    std::vector<PathStep> path;
+    std::vector<std::string> pruned;
+    ModelSpec recommended;
+    std::vector<std::string> findings;   // plain statements, most important first
+};
+
+// Fits `spec` to `data` and answers where it fails, what is missing and how sure that is.
+Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const DiagnosisOptions& options);
+
+// Squared prediction error of each segment (range of rows with one label) when `spec` is refitted
+// on all the other segments, starting from `values` (its fit on all rows): the Gauss-Newton step of
+// the model linearised at `values`, exact where the prediction is linear in the free parameters.
+// Empty with fewer than three segments.
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values);
+
+}  // namespace mhb::pmsm

@@ -1,0 +1,234 @@
+#include "problems/pmsm/model/steady_state_model.hpp"
+
+#include <map>
+#include <mutex>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <fmt/format.h>
+
+#include "framework/input_error.hpp"
+
+namespace mhb::pmsm {
+
+struct SteadyStateModel::AngleTable {
+    Eigen::ArrayXd cos, sin;
+
+    // The table of `theta` that a model alive now already uses, or a new one. Keyed by the column's
+    // storage: a model's data must not change or go while the model exists, so a live entry is
+    // always of the same numbers.
+    static std::shared_ptr<const AngleTable> of(const Eigen::VectorXd& theta) {
+        static std::mutex mutex;
+        static std::map<std::pair<const double*, Eigen::Index>, std::weak_ptr<const AngleTable>> tables;
+        const std::lock_guard lock(mutex);
+        std::erase_if(tables, [](const auto& entry) { return entry.second.expired(); });
+        auto& slot = tables[{theta.data(), theta.size()}];
+        if (auto table = slot.lock()) return table;
+        auto table = std::make_shared<AngleTable>();
+        table->cos = theta.array().cos();
+        table->sin = theta.array().sin();
+        slot = table;
+        return table;
+    }
+};
+
+Bounds base_parameter_bounds() {
+    Bounds b;
+    b.lower = Eigen::Vector4d::Constant(1e-6);
+    b.upper = Eigen::Vector4d(100.0, 10.0, 10.0, 10.0);
+    return b;
+}
+
+SteadyStateModel::SteadyStateModel(const Measurement& data, std::vector<std::unique_ptr<Effect>> effects)
+    : SteadyStateModel(std::nullopt, &data, std::move(effects)) {}
+
+SteadyStateModel::SteadyStateModel(Measurement&& data, std::vector<std::unique_ptr<Effect>> effects)
+    : SteadyStateModel(std::optional<Measurement>(std::move(data)), nullptr, std::move(effects)) {}
+
+SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measurement* view,
+                                   std::vector<std::unique_ptr<Effect>> effects)
+    : owned_(std::move(owned)),
+      data_(owned_ ? *owned_ : *view),
+      effects_(std::move(effects)),
+      names_(base_parameter_names),
+      linear_(4, false),
+      scratch_([this] {
+          BlockScratch b;
+          const Eigen::Index tail = data_.size() % block_rows;
+          b.state[0] = make_state(std::min(block_rows, data_.size()));
+          b.state[1] = make_state(tail);
+          b.affine[0] = make_affine(std::min(block_rows, data_.size()));
+          b.affine[1] = make_affine(tail);
+          return b;
+      }) {
+    if (data_.theta_e) angle_ = AngleTable::of(*data_.theta_e);
+    const Bounds base = base_parameter_bounds();
+    std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
+    for (const auto& e : effects_) {
+        require_columns(*e, data_);
+        for (const auto& column : e->model_columns()) {
+            reads_temp_winding_ = reads_temp_winding_ || column == "temp_winding";
+            reads_temp_magnet_ = reads_temp_magnet_ || column == "temp_magnet";
+        }
+        offsets_.push_back(static_cast<Eigen::Index>(names_.size()));
+        const bool sensor = (e->model_stages() & (ModelStage::SensorCurrents | ModelStage::SensorAngle)) != 0;
+        std::size_t real = 0;
+        for (const auto& spec : e->parameter_specs()) {
+            if (spec.type != ParameterType::Real) continue;
+            linear_.push_back(!sensor && e->model_linear_in(real++));
+            names_.push_back(e->name() + "." + spec.name);
+            lower.push_back(spec.minimum);
+            upper.push_back(spec.maximum);
+        }
+        stages_ |= e->model_stages();
+        for (unsigned bit = static_cast<unsigned>(ModelStage::Coefficients); bit <= static_cast<unsigned>(ModelStage::LoggedVoltage); bit <<= 1)
+            if ((e->model_stages() & bit) != 0 && e->model_base_dependence(static_cast<ModelStage>(bit)) == BaseDependence::Affine)
+                affine_effects_ = true;
+    }
+    bounds_.lower = Eigen::Map<Eigen::VectorXd>(lower.data(), static_cast<Eigen::Index>(lower.size()));
+    bounds_.upper = Eigen::Map<Eigen::VectorXd>(upper.data(), static_cast<Eigen::Index>(upper.size()));
+}
+
+Eigen::VectorXd SteadyStateModel::parameters_of(const MotorParameters& motor) const {
+    Eigen::VectorXd p(parameter_count());
+    p.head<4>() << motor.rs, motor.ld, motor.lq, motor.psi_f;
+    for (std::size_t k = 0; k < effects_.size(); ++k)
+        p.segment(offsets_[k], effects_[k]->values().size()) = effects_[k]->values();
+    return p;
+}
+
+ModelState SteadyStateModel::make_state(Eigen::Index rows) const {
+    const Eigen::Index n = rows < 0 ? data_.size() : rows;
+    ModelState s;
+    s.resize(n);
+    if (data_.theta_e)
+        for (auto* a : {&s.theta, &s.cos_theta, &s.sin_theta}) a->resize(n);
+    if (reads_temp_winding_) s.temp_winding.resize(n);
+    if (reads_temp_magnet_) s.temp_magnet.resize(n);
+    return s;
+}
+
+AffinePrediction SteadyStateModel::make_affine(Eigen::Index rows) const {
+    AffinePrediction a;
+    a.inputs = make_state(rows);
+    a.lane = make_state(rows);
+    for (auto* v : {&a.offset_d, &a.offset_q, &a.residual_d, &a.residual_q}) v->resize(rows);
+    for (auto* v : {&a.phi_d, &a.phi_q}) v->resize(rows, 4);
+    a.parameters.resize(parameter_count());
+    return a;
+}
+
+void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
+    const Eigen::Index n = s.size();
+    s.i_d = data_.i_d.segment(first, n).array();
+    s.i_q = data_.i_q.segment(first, n).array();
+    s.omega = data_.omega_e.segment(first, n).array();
+    if (data_.theta_e) {
+        s.theta = data_.theta_e->segment(first, n).array();
+        s.cos_theta = angle_->cos.segment(first, n);
+        s.sin_theta = angle_->sin.segment(first, n);
+    }
+    if (reads_temp_winding_) s.temp_winding = data_.temp_winding->segment(first, n).array();
+    if (reads_temp_magnet_) s.temp_magnet = data_.temp_magnet->segment(first, n).array();
+}
+
+void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const {
+    if (!acts_in(stages_, which)) return;
+    for (std::size_t k = 0; k < effects_.size(); ++k) {
+        const Effect& e = *effects_[k];
+        if (!acts_in(e.model_stages(), which)) continue;
+        if (base_lane && e.model_base_dependence(which) == BaseDependence::Additive) continue;
+        e.model(which, p + offsets_[k], s);
+    }
+}
+
+void SteadyStateModel::from_base(const double* p, ModelState& s, bool base_lane) const {
+    s.rs.setConstant(p[0]);
+    s.psi_f.setConstant(p[3]);
+    run_stage(ModelStage::Coefficients, p, s, base_lane);
+    s.psi_d = p[1] * s.i_d + s.psi_f;
+    s.psi_q = p[2] * s.i_q;
+    run_stage(ModelStage::FluxLinkage, p, s, base_lane);
+    s.u_d = s.rs * s.i_d - s.omega * s.psi_q;
+    s.u_q = s.rs * s.i_q + s.omega * s.psi_d;
+    for (auto stage : {ModelStage::MachineVoltage, ModelStage::InverterError, ModelStage::ControllerFrame, ModelStage::Delay,
+                       ModelStage::LoggedVoltage})
+        run_stage(stage, p, s, base_lane);
+}
+
+void SteadyStateModel::predict(const double* p, ModelState& s, Eigen::Index first) const {
+    load(s, first);
+    run_stage(ModelStage::SensorCurrents, p, s, false);
+    run_stage(ModelStage::SensorAngle, p, s, false);
+    from_base(p, s, false);
+}
+
+void SteadyStateModel::predict_rows(const double* p, double* u_d, double* u_q) const {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, blocks()), [&](const tbb::blocked_range<Eigen::Index>& range) {
+        BlockScratch& scratch = this->scratch();
+        for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
+            ModelState& s = scratch.state[scratch_index(b)];
+            const Eigen::Index first = block_first(b);
+            predict(p, s, first);
+            Eigen::Map<Eigen::ArrayXd>(u_d + first, s.size()) = s.u_d;
+            Eigen::Map<Eigen::ArrayXd>(u_q + first, s.size()) = s.u_q;
+        }
+    });
+}
+
+void SteadyStateModel::predict_affine(const double* p, AffinePrediction& out, Eigen::Index first) const {
+    ModelState& in = out.inputs;
+    load(in, first);
+    run_stage(ModelStage::SensorCurrents, p, in, false);
+    run_stage(ModelStage::SensorAngle, p, in, false);
+    // Later stages may change the currents and the angle too, so each run starts from the inputs.
+    auto restart = [&](ModelState& s) {
+        s.i_d = in.i_d;
+        s.i_q = in.i_q;
+        s.omega = in.omega;
+        s.theta = in.theta;
+        s.cos_theta = in.cos_theta;
+        s.sin_theta = in.sin_theta;
+        s.temp_winding = in.temp_winding;
+        s.temp_magnet = in.temp_magnet;
+    };
+    Eigen::VectorXd& q = out.parameters;
+    q = Eigen::Map<const Eigen::VectorXd>(p, parameter_count());
+    ModelState& s = out.lane;
+    q.head<4>().setZero();
+    restart(s);
+    from_base(q.data(), s, false);
+    out.offset_d = s.u_d;
+    out.offset_q = s.u_q;
+    for (int j = 0; j < 4; ++j) {
+        q.head<4>().setZero();
+        q[j] = 1.0;
+        restart(s);
+        from_base(q.data(), s, true);
+        out.phi_d.col(j) = s.u_d;
+        out.phi_q.col(j) = s.u_q;
+    }
+    if (!affine_effects_) return;
+    q.head<4>().setZero();
+    restart(s);
+    from_base(q.data(), s, true);
+    for (int j = 0; j < 4; ++j) {
+        out.phi_d.col(j) -= s.u_d;
+        out.phi_q.col(j) -= s.u_q;
+    }
+}
+
+void require_columns(const Effect& effect, const Measurement& data) {
+    for (const auto& column : effect.model_columns()) {
+        const bool present = column == "theta_e"        ? data.theta_e.has_value()
+                             : column == "temp_winding" ? data.temp_winding.has_value()
+                             : column == "temp_magnet"  ? data.temp_magnet.has_value()
+                             : column == "t"            ? data.t.has_value()
+                                                        : true;
+        if (!present)
+            throw InputError(data.source, 0, column,
+                             fmt::format("the {} effect needs this column, which the data lack", effect.name()));
+    }
+}
+
+}  // namespace mhb::pmsm

@@ -1,0 +1,126 @@
+#pragma once
+// The steady-state voltage model: the base model of seed eq. (2),
+//   u_d = R_s i_d - omega L_q i_q,   u_q = R_s i_q + omega L_d i_d + omega psi_f,
+// with any chosen effects applied stage by stage (effects/effect.hpp). Parameters are the four base
+// parameters followed by each effect's real parameters in declaration order.
+#include <algorithm>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include "framework/problem.hpp"
+#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/effects/effect.hpp"
+
+namespace mhb::pmsm {
+
+// Table 2 of the seed: the search box of the base parameters Rs, Ld, Lq, psi_f.
+Bounds base_parameter_bounds();
+inline const std::vector<std::string> base_parameter_names{"Rs", "Ld", "Lq", "psi_f"};
+
+// Throws InputError when `data` lacks a column the effect's model side needs.
+void require_columns(const Effect& effect, const Measurement& data);
+
+// The prediction split over a block of rows: u = offset + phi * (Rs, Ld, Lq, psi_f), for the effect
+// parameters it was made with (SteadyStateModel::predict_affine).
+struct AffinePrediction {
+    ModelState inputs;  // the block after the stages before the base parameters (sensors)
+    ModelState lane;    // one run of the later stages
+    Eigen::ArrayXd offset_d, offset_q;  // V: the prediction with the base parameters at zero
+    Eigen::ArrayXXd phi_d, phi_q;       // V per unit of each base parameter (rows x 4)
+    Eigen::VectorXd parameters;         // scratch: all parameters with the base ones replaced
+    Eigen::ArrayXd residual_d, residual_q;  // scratch for whoever reduces the block
+
+    Eigen::Index rows() const { return offset_d.size(); }
+};
+
+class SteadyStateModel {
+public:
+    // Rows per block: 512 rows of a model's ~20 per-sample arrays (80 kB) stay in the L2 cache.
+    static constexpr Eigen::Index block_rows = 512;
+
+    // Throws InputError when an effect needs a column the data lack.
+    // The model refers to `data`, which must outlive it (a long log is not copied).
+    SteadyStateModel(const Measurement& data, std::vector<std::unique_ptr<Effect>> effects);
+    // The model keeps `data`.
+    SteadyStateModel(Measurement&& data, std::vector<std::unique_ptr<Effect>> effects);
+    SteadyStateModel(const SteadyStateModel&) = delete;
+    SteadyStateModel& operator=(const SteadyStateModel&) = delete;
+
+    const Measurement& data() const { return data_; }
+    const std::vector<std::unique_ptr<Effect>>& effects() const { return effects_; }
+    Eigen::Index parameter_count() const { return static_cast<Eigen::Index>(names_.size()); }
+    // "Rs", "Ld", "Lq", "psi_f", then "<effect>.<parameter>".
+    const std::vector<std::string>& parameter_names() const { return names_; }
+    // Whether the prediction is linear in effect parameter j (Effect::model_linear_in); false for the
+    // base parameters, in which it is affine through the affine split instead.
+    bool linear_in(Eigen::Index j) const { return linear_[static_cast<std::size_t>(j)]; }
+    // Whether a block's state carries this temperature: only when an effect lists it (model_columns).
+    bool reads_temp_winding() const { return reads_temp_winding_; }
+    bool reads_temp_magnet() const { return reads_temp_magnet_; }
+    // Table 2 for the base parameters, each effect parameter's plausible range for the rest.
+    const Bounds& bounds() const { return bounds_; }
+    // The base parameters of `motor` followed by the effects' own values: the parameters a
+    // simulation with these effects was made with.
+    Eigen::VectorXd parameters_of(const MotorParameters& motor) const;
+
+    Eigen::Index blocks() const { return (data_.size() + block_rows - 1) / block_rows; }
+    // First row and row count of block b.
+    Eigen::Index block_first(Eigen::Index b) const { return b * block_rows; }
+    Eigen::Index block_size(Eigen::Index b) const { return std::min(block_rows, data_.size() - b * block_rows); }
+
+    // A state sized for `rows` rows of these data (allocate once, reuse for every prediction of
+    // blocks that size); all rows by default.
+    ModelState make_state(Eigen::Index rows = -1) const;
+    AffinePrediction make_affine(Eigen::Index rows) const;
+    // Predicted logged voltages of rows [first, first + state.size()) into state.u_d, state.u_q.
+    void predict(const double* parameters, ModelState& state, Eigen::Index first = 0) const;
+    // The offset and base-parameter columns of rows [first, first + out.rows()) at the effect
+    // parameters in `parameters` (its base entries are ignored): one run of the sensor stages, one
+    // run of the later stages for the offset and one per base parameter in which additive effects
+    // are skipped (plus one to remove the constant part of effects whose dependence is not stated).
+    void predict_affine(const double* parameters, AffinePrediction& out, Eigen::Index first) const;
+
+    // Scratch for one thread's work on one block: sized for full blocks ([0]) and the last one ([1]).
+    struct BlockScratch {
+        ModelState state[2];
+        AffinePrediction affine[2];
+    };
+    // This thread's scratch (made on first use, kept for the model's lifetime) and which of its
+    // two sizes block b uses.
+    BlockScratch& scratch() const { return scratch_.local(); }
+    int scratch_index(Eigen::Index b) const { return block_size(b) == block_rows ? 0 : 1; }
+    // Predicted logged voltages of all rows into u_d and u_q (each data().size() long), a block at a
+    // time, blocks in parallel; the same numbers on any number of threads.
+    void predict_rows(const double* parameters, double* u_d, double* u_q) const;
+
+private:
+    SteadyStateModel(std::optional<Measurement> owned, const Measurement* view, std::vector<std::unique_ptr<Effect>> effects);
+    void load(ModelState& s, Eigen::Index first) const;
+    void run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const;
+    // Coefficients onward, from base parameters p[0..3].
+    void from_base(const double* p, ModelState& s, bool base_lane) const;
+
+    std::optional<Measurement> owned_;
+    const Measurement& data_;
+    // cos and sin of the logged angle, computed once and shared by the models of the same data that
+    // exist at the same time: a diagnosis makes tens of models of one log, several at once.
+    struct AngleTable;
+    std::shared_ptr<const AngleTable> angle_;
+    std::vector<std::unique_ptr<Effect>> effects_;
+    std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
+    std::vector<std::string> names_;
+    std::vector<bool> linear_;  // per parameter, see linear_in
+    Bounds bounds_;
+    unsigned stages_ = 0;
+    bool affine_effects_ = false;
+    // Temperatures are copied into a block's state only for an effect that lists them
+    // (Effect::model_columns): each pass over a long log reads every column it loads from memory.
+    bool reads_temp_winding_ = false, reads_temp_magnet_ = false;
+    mutable tbb::enumerable_thread_specific<BlockScratch> scratch_;
+};
+
+}  // namespace mhb::pmsm

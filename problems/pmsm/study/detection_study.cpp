@@ -1,0 +1,533 @@
+#include "problems/pmsm/study/detection_study.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+#include <toml++/toml.h>
+
+#include "framework/input_error.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
+#include "problems/pmsm/data/text_file.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+long line_of(const toml::node& n) { return static_cast<long>(n.source().begin.line); }
+
+// Inline tables from the study file become ordinary ones, so the text reads as a profile section.
+void expand_inline(toml::table& t) {
+    t.is_inline(false);
+    for (auto&& [key, node] : t)
+        if (auto* sub = node.as_table()) expand_inline(*sub);
+}
+
+std::string toml_text(const toml::table& t) {
+    toml::table copy = t;
+    expand_inline(copy);
+    std::ostringstream out;
+    out << copy;
+    return out.str();
+}
+
+std::string leaf_text(const toml::node& n) {
+    toml::table wrapper;
+    wrapper.insert("v", n);
+    return toml_text(wrapper);
+}
+
+// Merges `from` into `into`, table by table; `from` wins. A leaf that `into` already holds with
+// another value is reported to `conflict` (when given) by its dotted key: two imperfections of one
+// case that set it differently.
+void merge(toml::table& into, const toml::table& from, const std::string& prefix, const std::function<void(const std::string&)>& conflict) {
+    for (auto&& [key, node] : from) {
+        const std::string dotted = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+        toml::node* existing = into.get(key);
+        if (existing && existing->is_table() && node.is_table()) {
+            merge(*existing->as_table(), *node.as_table(), dotted, conflict);
+        } else {
+            if (existing && conflict && leaf_text(*existing) != leaf_text(node)) conflict(dotted);
+            into.insert_or_assign(key, node);
+        }
+    }
+}
+
+// The text of `node` as the file writes it (from its source region), for tables people read.
+std::string as_written(const std::string& text, const toml::node& node) {
+    const auto& region = node.source();
+    std::vector<std::size_t> line_start{0};
+    for (std::size_t k = 0; k < text.size(); ++k)
+        if (text[k] == '\n') line_start.push_back(k + 1);
+    auto offset = [&](const toml::source_position& p) {
+        const std::size_t line = std::clamp<std::size_t>(p.line, 1, line_start.size()) - 1;
+        return std::min(text.size(), line_start[line] + (p.column > 0 ? p.column - 1 : 0));
+    };
+    const std::size_t begin = offset(region.begin), end = offset(region.end);
+    return end > begin ? text.substr(begin, end - begin) : std::string();
+}
+
+toml::table parse_settings(const std::string& text, const std::string& source) {
+    try {
+        return toml::parse(text, source);
+    } catch (const toml::parse_error& e) {
+        throw InputError(source, static_cast<long>(e.source().begin.line), "", std::string(e.description()));
+    }
+}
+
+const toml::table& settings_table(const std::string& file, const toml::table& t, std::string_view key, const std::string& field) {
+    const toml::node* n = t.get(key);
+    if (!n) throw InputError(file, 0, field + "." + std::string(key), "is required");
+    if (!n->is_table()) throw InputError(file, line_of(*n), field + "." + std::string(key), "expects a table of profile settings, e.g. { effects.deadtime.voltage = 0.28 }");
+    return *n->as_table();
+}
+
+std::string string_of(const std::string& file, const toml::node& n, const std::string& field) {
+    if (!n.is_string()) throw InputError(file, line_of(n), field, "expects a string");
+    return n.value<std::string>().value();
+}
+
+const toml::node& required(const std::string& file, const toml::table& t, std::string_view key, const std::string& field) {
+    const toml::node* n = t.get(key);
+    if (!n) throw InputError(file, line_of(t), field + "." + std::string(key), "is required");
+    return *n;
+}
+
+// Calls `read` for each table of the array of tables `key` (absent: none), refusing unknown keys.
+void each_table(const std::string& file, const toml::table& root, std::string_view key, const std::set<std::string>& allowed,
+                const std::function<void(const std::string&, const toml::table&)>& read) {
+    const toml::node* n = root.get(key);
+    if (!n) return;
+    const auto* list = n->as_array();
+    if (!list) throw InputError(file, line_of(*n), std::string(key), fmt::format("expects [[{}]] tables", key));
+    for (std::size_t k = 0; k < list->size(); ++k) {
+        const std::string field = fmt::format("{}[{}]", key, k);
+        const auto* t = (*list)[k].as_table();
+        if (!t) throw InputError(file, line_of((*list)[k]), field, "expects a table");
+        for (auto&& [name, node] : *t)
+            if (!allowed.count(std::string(name.str())))
+                throw InputError(file, line_of(node), field + "." + std::string(name.str()),
+                                 "unknown key (allowed: " + fmt::format("{}", fmt::join(allowed, ", ")) + ")");
+        read(field, *t);
+    }
+}
+
+std::vector<std::string> name_list(const std::string& file, const toml::node& n, const std::string& field, std::size_t size,
+                                   const std::set<std::string>& known) {
+    const auto* a = n.as_array();
+    if (!a || a->size() != size) throw InputError(file, line_of(n), field, fmt::format("expects a list of {} effect names", size));
+    std::vector<std::string> out;
+    for (const auto& e : *a) {
+        const std::string name = string_of(file, e, field);
+        if (!known.count(name)) throw InputError(file, line_of(e), field, "'" + name + "' is not one of the study's [[effect]] names");
+        if (std::find(out.begin(), out.end(), name) != out.end()) throw InputError(file, line_of(e), field, "'" + name + "' named twice");
+        out.push_back(name);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::string joined(const std::vector<std::string>& names, const char* separator) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : separator) + n;
+    return out;
+}
+
+}  // namespace
+
+StudySpec read_study(const std::filesystem::path& path) {
+    const std::string file = path.string();
+    const std::string text = read_text_file(path, "study file");
+    toml::table root;
+    try {
+        root = toml::parse(text, file);
+    } catch (const toml::parse_error& e) {
+        throw InputError(file, static_cast<long>(e.source().begin.line), "", std::string(e.description()));
+    }
+    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside", "together"};
+    for (auto&& [key, node] : root)
+        if (!allowed.count(std::string(key.str())))
+            throw InputError(file, line_of(node), std::string(key.str()),
+                             "unknown key (allowed: name, description, profile, model, seeds, pairs, triples, output, effect, outside, together)");
+    StudySpec spec;
+    spec.file = path;
+    const auto directory = path.parent_path();
+    auto required_string = [&](std::string_view key) {
+        const toml::node* n = root.get(key);
+        if (!n) throw InputError(file, 0, std::string(key), "is required");
+        return string_of(file, *n, std::string(key));
+    };
+    spec.name = required_string("name");
+    if (const auto* n = root.get("description")) spec.description = string_of(file, *n, "description");
+    spec.profile = directory / required_string("profile");
+    spec.profile_text = read_text_file(spec.profile, "simulation profile");
+    spec.output = directory / required_string("output");
+    if (const auto* n = root.get("model")) spec.model = string_of(file, *n, "model");
+    try {
+        parse_model_spec(spec.model);
+    } catch (const InputError& e) {
+        throw InputError(file, line_of(*root.get("model")), "model", e.message());
+    }
+    const toml::node* seeds = root.get("seeds");
+    if (!seeds) throw InputError(file, 0, "seeds", "is required (a count, seeds 1..N, or a list)");
+    if (seeds->is_integer()) {
+        const auto count = seeds->value<std::int64_t>().value_or(0);
+        if (count < 1 || count > 100000) throw InputError(file, line_of(*seeds), "seeds", fmt::format("must lie in [1, 100000] (got {})", count));
+        for (std::int64_t k = 1; k <= count; ++k) spec.seeds.push_back(static_cast<std::uint64_t>(k));
+    } else if (const auto* list = seeds->as_array(); list && !list->empty()) {
+        for (const auto& s : *list) {
+            const auto v = s.value<std::int64_t>();
+            if (!s.is_integer() || !v || *v < 0) throw InputError(file, line_of(s), "seeds", "expects non-negative integers");
+            spec.seeds.push_back(static_cast<std::uint64_t>(*v));
+        }
+    } else {
+        throw InputError(file, line_of(*seeds), "seeds", "expects a count or a non-empty list of integers");
+    }
+
+    std::set<std::string> names;
+    each_table(file, root, "effect", {"name", "clear", "weak", "in_pairs"}, [&](const std::string& field, const toml::table& t) {
+        StudyEffect e;
+        e.line = line_of(t);
+        const toml::node& name = required(file, t, "name", field);
+        e.name = string_of(file, name, field + ".name");
+        try {
+            e.name = EffectRegistry::instance().at(e.name, "effect").name;
+        } catch (const UnknownPlugin& u) {
+            throw InputError(file, line_of(name), field + ".name", u.what());
+        }
+        if (!names.insert(e.name).second) throw InputError(file, line_of(name), field + ".name", "'" + e.name + "' is listed twice");
+        e.clear = toml_text(settings_table(file, t, "clear", field));
+        e.clear_as_written = as_written(text, *t.get("clear"));
+        if (t.get("weak")) {
+            e.weak = toml_text(settings_table(file, t, "weak", field));
+            e.weak_as_written = as_written(text, *t.get("weak"));
+        }
+        if (const auto* in_pairs = t.get("in_pairs")) {
+            if (!in_pairs->is_boolean()) throw InputError(file, line_of(*in_pairs), field + ".in_pairs", "expects true or false");
+            e.in_combinations = in_pairs->value<bool>().value();
+        }
+        spec.effects.push_back(std::move(e));
+    });
+    each_table(file, root, "outside", {"name", "settings"}, [&](const std::string& field, const toml::table& t) {
+        StudyOutside o;
+        o.line = line_of(t);
+        o.name = string_of(file, required(file, t, "name", field), field + ".name");
+        o.settings = toml_text(settings_table(file, t, "settings", field));
+        o.settings_as_written = as_written(text, *t.get("settings"));
+        spec.outside.push_back(std::move(o));
+    });
+    each_table(file, root, "together", {"effects", "settings"}, [&](const std::string& field, const toml::table& t) {
+        StudyTogether g;
+        g.line = line_of(t);
+        const toml::node& effects = required(file, t, "effects", field);
+        const auto* list = effects.as_array();
+        g.effects = name_list(file, effects, field + ".effects", list ? std::max<std::size_t>(list->size(), 2) : 2, names);
+        g.settings = toml_text(settings_table(file, t, "settings", field));
+        spec.together.push_back(std::move(g));
+    });
+    if (const auto* pairs = root.get("pairs")) {
+        if (pairs->is_string() && pairs->value<std::string>() == "all") {
+            spec.all_pairs = true;
+        } else if (const auto* list = pairs->as_array()) {
+            spec.all_pairs = false;
+            for (const auto& p : *list) spec.pairs.push_back(name_list(file, p, "pairs", 2, names));
+        } else {
+            throw InputError(file, line_of(*pairs), "pairs", "expects \"all\" or a list of [\"a\", \"b\"] pairs");
+        }
+    }
+    if (const auto* triples = root.get("triples")) {
+        const auto* list = triples->as_array();
+        if (!list) throw InputError(file, line_of(*triples), "triples", "expects a list of [\"a\", \"b\", \"c\"] triples");
+        for (const auto& t : *list) spec.triples.push_back(name_list(file, t, "triples", 3, names));
+    }
+    return spec;
+}
+
+std::vector<StudyCase> study_cases(const StudySpec& spec) {
+    std::map<std::string, const StudyEffect*> by_name;
+    for (const auto& e : spec.effects) by_name[e.name] = &e;
+    const std::string file = spec.file.string();
+    // The settings of several imperfections, merged. Two that set one key differently cannot be
+    // simulated together unless a [[together]] table for a subset of them settles that key.
+    auto combine = [&](const std::vector<std::pair<std::string, std::string>>& parts) {
+        toml::table merged;
+        std::map<std::string, std::string> conflicts;  // dotted key -> "a and b"
+        std::string first;
+        // A plain reference, not a structured binding: clang 14 cannot capture a binding in a lambda.
+        for (const auto& part : parts) {
+            const std::string& name = part.first;
+            merge(merged, parse_settings(part.second, file), "", [&](const std::string& key) { conflicts.emplace(key, first + " and " + name); });
+            if (first.empty()) first = name;
+        }
+        for (const auto& g : spec.together) {
+            const bool applies = std::all_of(g.effects.begin(), g.effects.end(), [&](const std::string& e) {
+                return std::any_of(parts.begin(), parts.end(), [&](const auto& p) { return p.first == e; });
+            });
+            if (!applies) continue;
+            const auto settled = parse_settings(g.settings, file);
+            merge(merged, settled, "", {});
+            for (auto it = conflicts.begin(); it != conflicts.end();)
+                it = settled.at_path(it->first) ? conflicts.erase(it) : std::next(it);
+        }
+        if (!conflicts.empty()) {
+            const auto& [key, who] = *conflicts.begin();
+            const std::string second = who.substr(who.rfind(' ') + 1);
+            throw InputError(file, by_name.count(second) ? by_name[second]->line : 0, key,
+                             fmt::format("set differently by {}: they cannot be simulated together (a [[together]] table for them can settle it)", who));
+        }
+        return toml_text(merged);
+    };
+    std::vector<StudyCase> cases;
+    cases.push_back({"clean", "clean", "", {}, false, ""});
+    for (const auto& e : spec.effects) cases.push_back({e.name, "single", "clear", {e.name}, false, combine({{e.name, e.clear}})});
+    for (const auto& e : spec.effects)
+        if (!e.weak.empty()) cases.push_back({e.name, "single", "weak", {e.name}, false, combine({{e.name, e.weak}})});
+    std::vector<std::vector<std::string>> pairs = spec.pairs;
+    if (spec.all_pairs)
+        for (std::size_t a = 0; a < spec.effects.size(); ++a)
+            for (std::size_t b = a + 1; b < spec.effects.size(); ++b) {
+                if (!spec.effects[a].in_combinations || !spec.effects[b].in_combinations) continue;
+                std::vector<std::string> p{spec.effects[a].name, spec.effects[b].name};
+                std::sort(p.begin(), p.end());
+                pairs.push_back(p);
+            }
+    auto add_combination = [&](const std::vector<std::string>& names, const char* kind) {
+        std::vector<std::pair<std::string, std::string>> parts;
+        for (const auto& n : names) parts.emplace_back(n, by_name[n]->clear);
+        cases.push_back({joined(names, "+"), kind, "clear", names, false, combine(parts)});
+    };
+    for (const auto& p : pairs) add_combination(p, "pair");
+    for (const auto& t : spec.triples) add_combination(t, "triple");
+    for (const auto& o : spec.outside) cases.push_back({"outside:" + o.name, "outside", "clear", {}, true, combine({{o.name, o.settings}})});
+    if (!spec.only.empty()) std::erase_if(cases, [&](const StudyCase& c) { return c.label.find(spec.only) == std::string::npos; });
+    return cases;
+}
+
+std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_t seed) {
+    toml::table profile = parse_settings(spec.profile_text, spec.profile.string());
+    merge(profile, parse_settings(c.settings, spec.file.string()), "", {});
+    toml::table noise;
+    noise.insert("seed", static_cast<std::int64_t>(seed));
+    toml::table seed_table;
+    seed_table.insert("noise", noise);
+    merge(profile, seed_table, "", {});
+    return toml_text(profile);
+}
+
+StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const DiagnosisOptions& options,
+                   const std::function<void(std::size_t, std::size_t)>& progress) {
+    StudyRun run;
+    run.cases = std::move(cases);
+    const ModelSpec model = parse_model_spec(spec.model);
+    const std::size_t total = run.cases.size() * spec.seeds.size();
+    run.records.resize(total);
+    // Every case's profile is checked before any drive runs, so a bad setting stops the study at once.
+    for (const auto& c : run.cases) {
+        const std::string source = fmt::format("{} (case {})", spec.profile.string(), c.label);
+        parse_simulation_profile(case_profile(spec, c, spec.seeds.front()), source, spec.profile.parent_path());
+    }
+    std::atomic<std::size_t> done{0};
+    std::mutex progress_mutex;
+    tbb::parallel_for(std::size_t{0}, total, [&](std::size_t job) {
+        const auto start = std::chrono::steady_clock::now();
+        const std::size_t case_index = job / spec.seeds.size();
+        const StudyCase& c = run.cases[case_index];
+        StudyRecord r;
+        r.case_index = case_index;
+        r.seed = spec.seeds[job % spec.seeds.size()];
+        const std::string source = fmt::format("{} (case {}, seed {})", spec.profile.string(), c.label, r.seed);
+        const DriveSimulation sim = parse_simulation_profile(case_profile(spec, c, r.seed), source, spec.profile.parent_path());
+        SimulationResult result = simulate(sim);
+        if (!spec.keep_data.empty()) {
+            std::string name;
+            for (char ch : c.label + "_" + c.magnitude) name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' ? ch : '-';
+            write_simulation(spec.keep_data / fmt::format("{}_seed{}.csv", name, r.seed), sim, result, source);
+        }
+        result.data.source = source;
+        const Diagnosis d = diagnose(result.data, model, options);
+        r.recommended = d.recommended.text();
+        for (const auto& e : d.recommended.effects)
+            if (!model.contains(e.name)) r.found.push_back(e.name);
+        std::sort(r.found.begin(), r.found.end());
+        std::set_difference(r.found.begin(), r.found.end(), c.truth.begin(), c.truth.end(), std::back_inserter(r.false_positives));
+        std::set_difference(c.truth.begin(), c.truth.end(), r.found.begin(), r.found.end(), std::back_inserter(r.missed));
+        r.not_in_library = d.not_in_library;
+        r.tie = !d.tie.empty();
+        r.correct = r.found == c.truth && (!c.outside || d.not_in_library);
+        // The base parameters of the recommended model against the plant's (at 20 °C).
+        const ModelFit* fit = &d.model;
+        for (const auto& step : d.path)
+            if (step.fit.spec.text() == r.recommended) fit = &step.fit;
+        const Eigen::Vector4d truth(sim.motor.rs, sim.motor.ld, sim.motor.lq, sim.motor.psi_f);
+        r.base_error = (fit->values.head<4>() - truth).cwiseQuotient(truth);
+        r.rms = d.model.rms.total;
+        r.rms_recommended = fit->rms.total;
+        r.noise = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
+        r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        run.records[job] = std::move(r);
+        const std::size_t finished = ++done;
+        if (progress) {
+            std::lock_guard lock(progress_mutex);
+            progress(finished, total);
+        }
+    });
+    return run;
+}
+
+std::pair<double, double> wilson_interval(std::size_t k, std::size_t n) {
+    if (n == 0) return {0.0, 1.0};
+    const double z = 1.959963984540054, nn = static_cast<double>(n), p = static_cast<double>(k) / nn;
+    const double centre = (p + z * z / (2 * nn)) / (1 + z * z / nn);
+    const double half = z * std::sqrt(p * (1 - p) / nn + z * z / (4 * nn * nn)) / (1 + z * z / nn);
+    return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+namespace {
+
+struct CaseSummary {
+    std::size_t runs = 0, correct = 0, any_false_positive = 0, any_missed = 0, not_in_library = 0, ties = 0;
+    double false_positives = 0.0;
+    Eigen::Vector4d median_error = Eigen::Vector4d::Zero();  // of |relative error|, over runs
+    double seconds = 0.0;
+};
+
+double median(std::vector<double> v) {
+    if (v.empty()) return std::nan("");
+    std::sort(v.begin(), v.end());
+    const std::size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+std::vector<CaseSummary> summaries(const StudyRun& run) {
+    std::vector<CaseSummary> out(run.cases.size());
+    std::vector<std::array<std::vector<double>, 4>> errors(run.cases.size());
+    for (const auto& r : run.records) {
+        auto& s = out[r.case_index];
+        ++s.runs;
+        s.correct += r.correct ? 1 : 0;
+        s.any_false_positive += r.false_positives.empty() ? 0 : 1;
+        s.any_missed += r.missed.empty() ? 0 : 1;
+        s.not_in_library += r.not_in_library ? 1 : 0;
+        s.ties += r.tie ? 1 : 0;
+        s.false_positives += static_cast<double>(r.false_positives.size());
+        s.seconds += r.seconds;
+        for (int j = 0; j < 4; ++j) errors[r.case_index][static_cast<std::size_t>(j)].push_back(std::abs(r.base_error[j]));
+    }
+    for (std::size_t c = 0; c < out.size(); ++c) {
+        if (out[c].runs > 0) out[c].false_positives /= static_cast<double>(out[c].runs);
+        for (int j = 0; j < 4; ++j) out[c].median_error[j] = median(errors[c][static_cast<std::size_t>(j)]);
+    }
+    return out;
+}
+
+std::string rate(std::size_t k, std::size_t n) {
+    const auto [lo, hi] = wilson_interval(k, n);
+    return fmt::format("{}/{} = {:.0f} % [{:.0f}, {:.0f}]", k, n, 100.0 * static_cast<double>(k) / static_cast<double>(std::max<std::size_t>(n, 1)),
+                       100.0 * lo, 100.0 * hi);
+}
+
+}  // namespace
+
+std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
+    const auto s = summaries(run);
+    std::string md = fmt::format("# {}\n\n{}\n\n", spec.name, spec.description);
+    md += fmt::format("Profile `{}`, model diagnosed `{}`, {} noise seeds per case, {} cases, {} drives. A drive counts as correct when the "
+                      "recommended model adds exactly the effects that were simulated (and, for an effect the library lacks, nothing while "
+                      "saying \"not in the library\"). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
+                      "true| / true of the recommended model's base parameters.\n\n",
+                      spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size());
+    md += "## Summary\n\n| cases | drives | correct | any false positive | any missed | said \"not in the library\" |\n|---|---|---|---|---|---|\n";
+    auto group = [&](const std::string& title, const std::function<bool(const StudyCase&)>& in) {
+        std::size_t n = 0, k = 0, fp = 0, miss = 0, nil = 0;
+        for (std::size_t c = 0; c < run.cases.size(); ++c) {
+            if (!in(run.cases[c])) continue;
+            n += s[c].runs;
+            k += s[c].correct;
+            fp += s[c].any_false_positive;
+            miss += s[c].any_missed;
+            nil += s[c].not_in_library;
+        }
+        if (n > 0) md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", title, n, rate(k, n), rate(fp, n), rate(miss, n), rate(nil, n));
+    };
+    group("clean data", [](const StudyCase& c) { return c.kind == "clean"; });
+    group("single effects, clear", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "clear"; });
+    group("single effects, near the limit", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "weak"; });
+    group("pairs, clear", [](const StudyCase& c) { return c.kind == "pair"; });
+    group("triples, clear", [](const StudyCase& c) { return c.kind == "triple"; });
+    group("effects outside the library", [](const StudyCase& c) { return c.kind == "outside"; });
+    md += "\n## Per case\n\n| case | kind | magnitude | correct | false positives per drive | missed | not in library | ties | median error Rs, Ld, Lq, psi_f (%) | most common wrong answer |\n";
+    md += "|---|---|---|---|---|---|---|---|---|---|\n";
+    for (std::size_t c = 0; c < run.cases.size(); ++c) {
+        std::map<std::string, int> wrong;
+        for (const auto& r : run.records)
+            if (r.case_index == c && !r.correct) ++wrong[r.recommended + (r.not_in_library ? " (not in library)" : "") + (r.tie ? " (tie)" : "")];
+        std::string common = "—";
+        int most = 0;
+        for (const auto& [answer, count] : wrong)
+            if (count > most) {
+                most = count;
+                common = fmt::format("`{}` ({}x)", answer, count);
+            }
+        const auto& x = s[c];
+        md += fmt::format("| {} | {} | {} | {} | {:.2f} | {} | {} | {} | {:.2f}, {:.2f}, {:.2f}, {:.2f} | {} |\n", run.cases[c].label, run.cases[c].kind,
+                          run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs), x.false_positives, x.any_missed,
+                          x.not_in_library, x.ties, 100 * x.median_error[0], 100 * x.median_error[1], 100 * x.median_error[2], 100 * x.median_error[3],
+                          common);
+    }
+    md += "\n## The settings of each effect\n\n| effect | clear | near the limit |\n|---|---|---|\n";
+    auto one_line = [](std::string text) {
+        std::string out;
+        for (char ch : text) out += ch == '\n' ? ' ' : ch;
+        return out;
+    };
+    for (const auto& e : spec.effects)
+        md += fmt::format("| {} | `{}` | {} |\n", e.name, one_line(e.clear_as_written),
+                          e.weak.empty() ? std::string("—") : "`" + one_line(e.weak_as_written) + "`");
+    for (const auto& o : spec.outside) md += fmt::format("| {} (not in the library) | `{}` | — |\n", o.name, one_line(o.settings_as_written));
+    return md;
+}
+
+std::string study_csv(const StudyRun& run) {
+    const auto s = summaries(run);
+    std::string csv = "case,kind,magnitude,drives,correct,rate,rate_low95,rate_high95,false_positives_per_drive,any_missed,not_in_library,ties,"
+                      "median_abs_error_rs,median_abs_error_ld,median_abs_error_lq,median_abs_error_psi_f,mean_seconds\n";
+    for (std::size_t c = 0; c < run.cases.size(); ++c) {
+        const auto& x = s[c];
+        const auto [lo, hi] = wilson_interval(x.correct, x.runs);
+        csv += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.4g}\n", run.cases[c].label, run.cases[c].kind,
+                           run.cases[c].magnitude, x.runs, x.correct, static_cast<double>(x.correct) / static_cast<double>(std::max<std::size_t>(x.runs, 1)),
+                           lo, hi, x.false_positives, x.any_missed, x.not_in_library, x.ties, x.median_error[0], x.median_error[1], x.median_error[2],
+                           x.median_error[3], x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)));
+    }
+    return csv;
+}
+
+nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord& r) {
+    const auto& c = run.cases[r.case_index];
+    return {{"case", c.label},
+            {"kind", c.kind},
+            {"magnitude", c.magnitude},
+            {"seed", r.seed},
+            {"truth", c.truth},
+            {"outside", c.outside},
+            {"recommended_model", r.recommended},
+            {"found", r.found},
+            {"correct", r.correct},
+            {"false_positives", r.false_positives},
+            {"missed", r.missed},
+            {"not_in_library", r.not_in_library},
+            {"tie", r.tie},
+            {"base_error", {{"Rs", r.base_error[0]}, {"Ld", r.base_error[1]}, {"Lq", r.base_error[2]}, {"psi_f", r.base_error[3]}}},
+            {"rms", r.rms},
+            {"rms_recommended", r.rms_recommended},
+            {"noise", r.noise},
+            {"seconds", r.seconds}};
+}
+
+}  // namespace mhb::pmsm

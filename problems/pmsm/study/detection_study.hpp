@@ -1,0 +1,119 @@
+#pragma once
+// The hidden-effect study (docs/effects.md, "Detection rates, measured"): drives simulated with
+// known imperfections, over many noise seeds, diagnosed blind; how often the recommended model is
+// the truth, how often clean data raise a false alarm, how well the base parameters come back.
+//
+// A study file (TOML, experiments/pmsm/detection_study.toml) names a simulation profile and, for each
+// library effect, the profile settings that make it appear at two magnitudes (one clear, one near
+// the detection limit). Settings are nested TOML tables merged into the profile, so a study works
+// on the averaged plant (`effects.deadtime.voltage = 0.28`) and on the device plant
+// (`plant.inverter.dead_time = 1e-6`) alike. Cases: clean data, each effect alone at both
+// magnitudes, pairs and listed triples at the clear magnitude, and effects the library lacks.
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "problems/pmsm/diagnosis/diagnosis.hpp"
+
+namespace mhb::pmsm {
+
+struct StudyEffect {
+    std::string name;            // the library effect the diagnosis should recommend
+    std::string clear, weak;     // profile settings, TOML text of nested tables (weak empty: no near-limit case)
+    std::string clear_as_written, weak_as_written;  // the same, as the study file writes them (for tables)
+    bool in_combinations = true; // also in "all" pairs
+    long line = 0;               // in the study file
+};
+
+struct StudyOutside {
+    std::string name;            // an effect the library lacks
+    std::string settings;        // profile settings, TOML text
+    std::string settings_as_written;
+    long line = 0;
+};
+
+// Settings for a case that holds all of `effects` (two imperfections of one device, e.g. winding and
+// magnet heating in one thermal network): merged last, they settle what the effects' own settings
+// would set differently.
+struct StudyTogether {
+    std::vector<std::string> effects;  // sorted
+    std::string settings;
+    long line = 0;
+};
+
+struct StudySpec {
+    std::filesystem::path file;        // the study file
+    std::string name, description;
+    std::filesystem::path profile;     // the simulation profile, resolved
+    std::string profile_text;          // its text, read once (every drive merges its settings into it)
+    std::string model = "base";        // the model diagnosed
+    std::vector<std::uint64_t> seeds;  // noise seeds
+    std::vector<StudyEffect> effects;
+    bool all_pairs = true;             // every pair of effects
+    std::vector<std::vector<std::string>> pairs;    // when not all
+    std::vector<std::vector<std::string>> triples;
+    std::vector<StudyOutside> outside;
+    std::vector<StudyTogether> together;
+    std::filesystem::path output;      // resolved against the study file's directory
+    std::filesystem::path keep_data;   // when set, each drive's measurement is written here (CASE_seedN.csv and sidecar)
+    std::string only;                  // when set, only cases whose label contains it
+};
+
+// Reads and checks a study file (InputError naming the file, line and field).
+StudySpec read_study(const std::filesystem::path& path);
+
+// One simulated drive of the study: which imperfections, at which magnitude.
+struct StudyCase {
+    std::string label;                  // "deadtime", "deadtime+rs_thermal", "clean", "outside:phase_gain"
+    std::string kind;                   // clean, single, pair, triple, outside
+    std::string magnitude;              // clear, weak (empty for clean)
+    std::vector<std::string> truth;     // library effects present (sorted)
+    bool outside = false;               // an effect the library lacks is present
+    std::string settings;               // merged settings, TOML text
+};
+
+std::vector<StudyCase> study_cases(const StudySpec& spec);
+
+struct StudyRecord {
+    std::size_t case_index = 0;
+    std::uint64_t seed = 0;
+    std::string recommended;            // the recommended model
+    std::vector<std::string> found;     // its effects beyond the model diagnosed (sorted)
+    bool correct = false;               // found == truth (and, with an outside effect, "not in the library" said)
+    bool not_in_library = false;
+    bool tie = false;
+    std::vector<std::string> false_positives, missed;
+    Eigen::Vector4d base_error = Eigen::Vector4d::Zero();  // (fitted - true) / true of Rs, Ld, Lq, psi_f, recommended model
+    double rms = 0.0, rms_recommended = 0.0, noise = 0.0;  // V
+    double seconds = 0.0;               // simulate + diagnose, wall
+};
+
+struct StudyRun {
+    std::vector<StudyCase> cases;
+    std::vector<StudyRecord> records;   // case-major, then seed order
+};
+
+// Runs every case (from study_cases, or some of them) at every seed in parallel (TBB); the records do not depend on the thread count.
+// `progress` (optional) is called after each finished drive with the count done and the total.
+StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const DiagnosisOptions& options,
+                   const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+// The simulation profile of one case at one seed, as TOML text (the profile with the case's settings
+// and the seed merged in).
+std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_t seed);
+
+// table.md: rates per case with Wilson 95 % intervals, summaries per kind; table.csv: the same per case.
+std::string study_markdown(const StudySpec& spec, const StudyRun& run);
+std::string study_csv(const StudyRun& run);
+nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord& r);
+
+// Wilson score interval for k successes in n trials at 95 %.
+std::pair<double, double> wilson_interval(std::size_t k, std::size_t n);
+
+}  // namespace mhb::pmsm
