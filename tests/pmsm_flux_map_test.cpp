@@ -7,7 +7,7 @@
 
 #include "framework/input_error.hpp"
 #include "framework/random.hpp"
-#include "problems/pmsm/machine/flux_map.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
 #include "problems/pmsm/fit/linear_fit.hpp"
 #include "tests/pmsm_fixture.hpp"
 #include "tests/temporary_directory.hpp"

@@ -11,7 +11,7 @@
 
 #include <fmt/format.h>
 
-#include "problems/pmsm/machine/flux_map.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 
 using namespace mhb;

@@ -1,4 +1,4 @@
-// libFuzzer harness: the flux map CSV (problems/pmsm/machine/flux_map.hpp).
+// libFuzzer harness: the flux map CSV (problems/pmsm/machine/flux_models.hpp).
 // Build and run: docs/fuzzing.md.
 #include "tests/fuzz/input_formats.hpp"
 

@@ -6,7 +6,7 @@
 #include "framework/experiment_config.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
-#include "problems/pmsm/machine/flux_map.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
 #include "problems/pmsm/data/measurement.hpp"
 #include "problems/pmsm/model/model_spec.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"

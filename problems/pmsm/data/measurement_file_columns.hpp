@@ -53,4 +53,15 @@ FileColumns read_mat_columns(const std::filesystem::path& path);
 // holds no dataset and exactly one group, that group's datasets.
 FileColumns read_hdf5_columns(const std::filesystem::path& path);
 
+// Shared by the CSV reader, the CSV writer and the mapping of binary files' columns (measurement.cpp).
+// A CSV field as the reader takes it: without surrounding blanks, a quoted field as its content.
+std::string_view csv_field_text(std::string_view s);
+struct Measurement;
+class UnitConversion;
+// The vector that holds mhbench's numeric column `name` in `m`, created for an optional column.
+Eigen::VectorXd* numeric_column(Measurement& m, const std::string& name);
+// A value converted to mhbench's unit, refused when the conversion leaves the range of a double.
+double converted(const UnitConversion& conversion, double value, const std::string& source, long line,
+                 const std::string& field, const std::string& row);
+
 }  // namespace mhb::pmsm

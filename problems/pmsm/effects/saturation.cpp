@@ -12,37 +12,10 @@
 #include <fmt/format.h>
 
 #include "problems/pmsm/effects/effect.hpp"
-#include "problems/pmsm/machine/flux_map.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
 
 namespace mhb::pmsm {
 namespace {
-
-// Coefficient order: k_d2, k_d3, k_q3, k_q5, k_dq1, k_dq2, k_dq3.
-Complex flux_change(const double* k, double id, double iq) {
-    const double iq2 = iq * iq;
-    return {k[0] * id * id + k[1] * id * id * id + 0.5 * k[4] * iq2 + k[5] * id * iq2 + 0.25 * k[6] * iq2 * iq2,
-            k[2] * iq2 * iq + k[3] * iq2 * iq2 * iq + k[4] * id * iq + k[5] * id * id * iq + k[6] * id * iq2 * iq};
-}
-
-class PolynomialFlux final : public FluxModel {
-public:
-    PolynomialFlux(double ld, double lq, const Eigen::VectorXd& k) : ld_(ld), lq_(lq) {
-        for (int j = 0; j < 7; ++j) k_[j] = k[j];
-    }
-    Complex flux(Complex i, double psi_f) const override {
-        return Complex{ld_ * i.real() + psi_f, lq_ * i.imag()} + flux_change(k_, i.real(), i.imag());
-    }
-    Inductance incremental_inductance(Complex i) const override {
-        const double id = i.real(), iq = i.imag(), iq2 = iq * iq;
-        const double cross = k_[4] * iq + 2.0 * k_[5] * id * iq + k_[6] * iq2 * iq;
-        return {ld_ + 2.0 * k_[0] * id + 3.0 * k_[1] * id * id + k_[5] * iq2, cross, cross,
-                lq_ + 3.0 * k_[2] * iq2 + 5.0 * k_[3] * iq2 * iq2 + k_[4] * id + k_[5] * id * id + 3.0 * k_[6] * id * iq2};
-    }
-
-private:
-    double ld_, lq_;
-    double k_[7];
-};
 
 class Saturation final : public Effect {
 public:
@@ -63,7 +36,7 @@ public:
     bool model_linear_in(std::size_t) const override { return true; }
     void model(ModelStage, const double* k, ModelState& s) const override {
         for (Eigen::Index j = 0; j < s.psi_d.size(); ++j) {
-            const Complex change = flux_change(k, s.i_d[j], s.i_q[j]);
+            const Complex change = polynomial_flux_change(k, s.i_d[j], s.i_q[j]);
             s.psi_d[j] += change.real();
             s.psi_q[j] += change.imag();
         }

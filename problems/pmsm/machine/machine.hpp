@@ -47,7 +47,8 @@ inline double wrap_angle(double a) {
 using Inductance = std::array<double, 4>;
 
 // The plant's flux linkage as a function of the currents (rotor frame), with the permanent-magnet
-// flux psi_f passed in so thermal effects can change it.
+// flux psi_f passed in so thermal effects can change it. The models mhbench brings are in
+// flux_models.hpp.
 class FluxModel {
 public:
     virtual ~FluxModel() = default;
@@ -56,20 +57,6 @@ public:
     // Inverts flux(): the currents that produce `psi`. Damped Newton from `guess` (the simulator passes
     // the previous step's current, so one or two iterations suffice).
     virtual Complex current(Complex psi, double psi_f, Complex guess) const;
-};
-
-// psi_d = Ld i_d + psi_f, psi_q = Lq i_q: the machine of the base model.
-class LinearFlux final : public FluxModel {
-public:
-    LinearFlux(double ld, double lq) : ld_(ld), lq_(lq) {}
-    Complex flux(Complex i, double psi_f) const override { return {ld_ * i.real() + psi_f, lq_ * i.imag()}; }
-    Inductance incremental_inductance(Complex) const override { return {ld_, 0.0, 0.0, lq_}; }
-    Complex current(Complex psi, double psi_f, Complex) const override {
-        return {(psi.real() - psi_f) / ld_, psi.imag() / lq_};
-    }
-
-private:
-    double ld_, lq_;
 };
 
 // Electromagnetic torque of a dq machine, 1.5 p (psi_d i_q - psi_q i_d), in N m.

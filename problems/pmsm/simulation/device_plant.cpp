@@ -10,118 +10,13 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "problems/pmsm/simulation/drive_simulator.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
+#include "problems/pmsm/simulation/drive_configuration.hpp"
+#include "problems/pmsm/simulation/thermal_network.hpp"
 
 namespace mhb::pmsm {
 
-void check_device_settings(const DeviceSettings& device, const DriveControl& control) {
-    const auto& inv = device.inverter;
-    if (!(inv.pwm_frequency > 0)) throw std::invalid_argument("inverter.pwm_frequency must be positive");
-    const double carriers = control.control_period * inv.pwm_frequency;
-    if (std::llround(carriers) < 1 || std::abs(carriers - static_cast<double>(std::llround(carriers))) > 1e-6 * carriers)
-        throw std::invalid_argument(fmt::format(
-            "inverter.pwm_frequency x control_period = {} must be a whole number >= 1 (the currents are sampled at a "
-            "carrier peak once per control period)", carriers));
-    if (!(inv.dead_time >= 0) || inv.dead_time >= 0.25 / inv.pwm_frequency)
-        throw std::invalid_argument("inverter.dead_time must lie in [0, a quarter of the carrier period)");
-    if (!(inv.switch_drop >= 0) || !(inv.diode_drop >= 0) || !(inv.switch_resistance >= 0) || !(inv.diode_resistance >= 0))
-        throw std::invalid_argument("inverter device drops and on-resistances must not be negative");
-    if (device.encoder.lines < 0) throw std::invalid_argument("encoder.lines must not be negative");
-    for (const auto& h : device.rotor_flux.harmonics)
-        if (h.order < 5 || h.order % 2 == 0 || h.order % 3 == 0 || !(h.amplitude >= 0))
-            throw std::invalid_argument(fmt::format(
-                "rotor_flux harmonic order {} amplitude {}: orders are odd, not multiples of 3, >= 5; amplitudes >= 0",
-                h.order, h.amplitude));
-    if (!(device.saturation.saturation_current >= 0))
-        throw std::invalid_argument("saturation.saturation_current must not be negative");
-    const auto& th = device.thermal;
-    if (!(th.winding_capacity > 0 && th.magnet_capacity > 0 && th.winding_to_magnet > 0 && th.winding_to_ambient > 0 &&
-          th.magnet_to_ambient > 0 && th.iron_loss >= 0))
-        throw std::invalid_argument("thermal capacities and resistances must be positive, iron_loss not negative");
-}
-
 namespace {
-
-// Iron whose permeability falls with the armature's stored magnetic energy. The co-energy
-// W = psi_f i_d + Q (sqrt(1 + q/Q) - 1), q = L_d i_d^2 + L_q i_q^2, Q = L_q I_sat^2 gives
-// psi_d = psi_f + k L_d i_d, psi_q = k L_q i_q with k = (1 + q/Q)^(-1/2): linear for small currents,
-// the q flux tending to L_q I_sat, the d current saturating the q axis and back (reciprocal, since
-// both come from one co-energy).
-class SaturatingIron final : public FluxModel {
-public:
-    SaturatingIron(double ld, double lq, double saturation_current)
-        : ld_(ld), lq_(lq), q_sat_(lq * saturation_current * saturation_current) {}
-
-    Complex flux(Complex i, double psi_f) const override {
-        const double k = permeability_factor(i);
-        return {psi_f + k * ld_ * i.real(), k * lq_ * i.imag()};
-    }
-
-    Inductance incremental_inductance(Complex i) const override {
-        const double k = permeability_factor(i);
-        const double k3 = k * k * k / q_sat_;  // -2 dk/dq
-        const double ld_id = ld_ * i.real(), lq_iq = lq_ * i.imag();
-        const double cross = -k3 * ld_id * lq_iq;
-        return {k * ld_ - k3 * ld_id * ld_id, cross, cross, k * lq_ - k3 * lq_iq * lq_iq};
-    }
-
-private:
-    double permeability_factor(Complex i) const {
-        const double q = ld_ * i.real() * i.real() + lq_ * i.imag() * i.imag();
-        return 1.0 / std::sqrt(1.0 + q / q_sat_);
-    }
-
-    double ld_, lq_, q_sat_;
-};
-
-// exp(M) of a small matrix by scaling and squaring a Taylor series (the thermal network's 3 x 3
-// augmented matrix, whose norm is known only at run time).
-Eigen::Matrix3d matrix_exponential(const Eigen::Matrix3d& m) {
-    const double norm = m.cwiseAbs().rowwise().sum().maxCoeff();
-    int squarings = 0;
-    while (std::ldexp(norm, -squarings) > 0.5) ++squarings;
-    const Eigen::Matrix3d a = m * std::ldexp(1.0, -squarings);
-    Eigen::Matrix3d sum = Eigen::Matrix3d::Identity(), term = Eigen::Matrix3d::Identity();
-    for (int k = 1; k <= 16; ++k) {
-        term = term * a / static_cast<double>(k);
-        sum += term;
-    }
-    for (int k = 0; k < squarings; ++k) sum = sum * sum;
-    return sum;
-}
-
-// The two-node network in temperature rises over the ambient, theta = T - T_amb:
-//   C_w dtheta_w/dt = P - theta_w / R_wa - (theta_w - theta_m) / R_wm
-//   C_m dtheta_m/dt = (theta_w - theta_m) / R_wm - theta_m / R_ma
-// discretised exactly for a loss P held over one control period.
-class HeatedWindingAndMagnet {
-public:
-    HeatedWindingAndMagnet(const ThermalNetwork& n, double period) : network_(n) {
-        rise_ = {n.initial_winding - n.ambient, n.initial_magnet - n.ambient};
-        if (!n.enabled) return;
-        Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-        m(0, 0) = -(1.0 / n.winding_to_ambient + 1.0 / n.winding_to_magnet) / n.winding_capacity;
-        m(0, 1) = 1.0 / (n.winding_to_magnet * n.winding_capacity);
-        m(1, 0) = 1.0 / (n.winding_to_magnet * n.magnet_capacity);
-        m(1, 1) = -(1.0 / n.magnet_to_ambient + 1.0 / n.winding_to_magnet) / n.magnet_capacity;
-        m(0, 2) = 1.0 / n.winding_capacity;
-        const Eigen::Matrix3d e = matrix_exponential(m * period);
-        transition_ = e.topLeftCorner<2, 2>();
-        input_ = e.topRightCorner<2, 1>();
-    }
-
-    void advance(double loss) {
-        if (network_.enabled) rise_ = transition_ * rise_ + input_ * loss;
-    }
-    double winding() const { return network_.ambient + rise_[0]; }
-    double magnet() const { return network_.ambient + rise_[1]; }
-
-private:
-    ThermalNetwork network_;
-    Eigen::Vector2d rise_;
-    Eigen::Matrix2d transition_ = Eigen::Matrix2d::Identity();
-    Eigen::Vector2d input_ = Eigen::Vector2d::Zero();
-};
 
 // Gate state of one inverter leg.
 enum class Gate { lower, upper, none };

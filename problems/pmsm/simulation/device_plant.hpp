@@ -15,11 +15,6 @@
 namespace mhb::pmsm {
 
 struct DriveSimulation;
-struct DriveControl;
-
-// Refuses device settings that cannot describe a drive with these control settings
-// (std::invalid_argument naming the setting).
-void check_device_settings(const DeviceSettings& device, const DriveControl& control);
 
 // The device plant of `spec` (spec.device must be set), at rest at time 0.
 std::unique_ptr<ControlledPlant> make_device_plant(const DriveSimulation& spec);

@@ -81,4 +81,10 @@ struct DeviceSettings {
     LoggingOffset logging_offset;
 };
 
+struct DriveControl;
+
+// Refuses device settings that cannot describe a drive with these control settings
+// (std::invalid_argument naming the setting).
+void check_device_settings(const DeviceSettings& device, const DriveControl& control);
+
 }  // namespace mhb::pmsm

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "problems/pmsm/simulation/drive_simulator.hpp"
+#include "problems/pmsm/simulation/drive_configuration.hpp"
 
 namespace mhb::pmsm {
 

@@ -1,4 +1,4 @@
-#include "problems/pmsm/machine/flux_map.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
 
 #include <algorithm>
 #include <charconv>
