@@ -3,8 +3,12 @@
 // include/mhbench (registry, optimizer, problem, parameters, random, commands, the PMSM effect).
 // Raise the version with any change to them that a plugin built before it would not survive: a
 // class's layout, a virtual function, a signature, a registry's entry.
+// tests/plugin_interface_test.cpp records a digest of the headers' code for each version and fails
+// when the code changes while the version stays.
 // 2: Evaluator gained the anytime recorder (a member, so its size changed).
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 2
+// 3: the PMSM headers moved into rooms (machine/, data/; the old paths forward); effects/effect.hpp no
+//    longer declares require_columns nor includes the measurement; LinearFlux left machine.hpp.
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 3
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

@@ -53,6 +53,14 @@ TEST_CASE("the docs' example plugins build against the installed package and loa
     // The interfaces a plugin needs are installed, the runner's insides are not.
     CHECK(fs::exists(prefix / "include/mhbench/framework/registry.hpp"));
     CHECK(fs::exists(prefix / "include/mhbench/problems/pmsm/effects/effect.hpp"));
+    // Headers that moved into problems/pmsm/'s rooms still answer at their old paths.
+    for (const char* old : {"machine.hpp", "measurement.hpp", "column_map.hpp"}) {
+        std::ifstream forwarding(prefix / "include/mhbench/problems/pmsm" / old);
+        std::stringstream text;
+        text << forwarding.rdbuf();
+        INFO(old);
+        CHECK(text.str().find("#include \"problems/pmsm/") != std::string::npos);
+    }
     CHECK_FALSE(fs::exists(prefix / "include/mhbench/framework/experiment_runner.hpp"));
     CHECK_FALSE(fs::exists(prefix / "include/mhbench/framework/results_store.hpp"));
 
