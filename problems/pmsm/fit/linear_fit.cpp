@@ -58,6 +58,191 @@ double andrews_bandwidth(const Eigen::ArrayXd& sxy, const Eigen::ArrayXd& sxx, c
     return 1.1447 * std::cbrt(numerator / denominator * static_cast<double>(samples));
 }
 
+// The regression's residual and regressor rows a block of samples at a time, and the scores made
+// from them. Prewhitening (after Andrews & Monahan 1992), on each axis' residual series: an AR(1)
+// fitted within blocks takes out most of the autocorrelation of closed-loop errors, and dividing the
+// innovations by (1 - rho) recolours their sums. The whitened scores, all axes together so their
+// correlation is kept, then get Newey-West weights. This assumes the regressors change slowly
+// against the errors' correlation time, as at held operating points; plain Bartlett weights on
+// strongly persistent errors underestimate the variance badly.
+struct ScoreStream {
+    ScoreStream(const RegressorBlocks& regressors, const Eigen::VectorXd& residual, const RowLayout& layout)
+        : regressors(regressors), residual(residual), layout(layout), n(layout.samples), p(regressors.columns),
+          width(regressors.block_samples), axes(layout.axes), blocks((n + width - 1) / width) {}
+
+    Eigen::Index block_size(Eigen::Index b) const { return std::min(width, n - b * width); }
+    // Whether sample t continues the block (segment) of sample t - 1.
+    bool continues(Eigen::Index t) const { return t > 0 && (layout.block.size() == 0 || layout.block[t] == layout.block[t - 1]); }
+    // Block b's regressor rows, every axis (phi is resized).
+    void fill(Eigen::Index b, Eigen::MatrixXd& phi) const {
+        phi.resize(axes * block_size(b), p);
+        regressors.fill(b, phi);
+    }
+    // The whitened scores of block b's samples (p x size), from its rows `phi`.
+    void scores(Eigen::Index b, const Eigen::MatrixXd& phi, const Eigen::VectorXd& rho, Eigen::MatrixXd& out) const {
+        const Eigen::Index first = b * width, size = block_size(b);
+        out.setZero(p, size);
+        for (int a = 0; a < axes; ++a) {
+            const double* r = residual.data() + a * n;
+            for (Eigen::Index k = 0; k < size; ++k) {
+                const Eigen::Index t = first + k;
+                // Prais-Winsten first term, so a block's first innovation has the same variance.
+                const double innovation = continues(t) ? r[t] - rho[a] * r[t - 1] : std::sqrt(1.0 - rho[a] * rho[a]) * r[t];
+                out.col(k) += phi.row(a * size + k).transpose() * (innovation / (1.0 - rho[a]));
+            }
+        }
+    }
+
+    const RegressorBlocks& regressors;
+    const Eigen::VectorXd& residual;
+    const RowLayout& layout;
+    Eigen::Index n, p, width;
+    int axes;
+    Eigen::Index blocks;
+};
+
+// Each axis' residual standard deviation and lag-1 autocorrelation within blocks.
+void axis_noise(const ScoreStream& stream, Eigen::VectorXd& sigma, Eigen::VectorXd& rho) {
+    const Eigen::Index n = stream.n;
+    sigma.resize(stream.axes);
+    rho = Eigen::VectorXd::Zero(stream.axes);
+    for (int a = 0; a < stream.axes; ++a) {
+        const auto r = stream.residual.segment(a * n, n);
+        sigma[a] = std::sqrt(r.squaredNorm() / static_cast<double>(n));
+        double sxy = 0.0, sxx = 0.0;
+        for (Eigen::Index t = 1; t < n; ++t)
+            if (stream.continues(t)) {
+                sxy += r[t] * r[t - 1];
+                sxx += r[t - 1] * r[t - 1];
+            }
+        rho[a] = sxx > 0.0 ? std::clamp(sxy / sxx, -0.97, 0.97) : 0.0;
+    }
+}
+
+struct GramAndLagSums {
+    std::vector<Eigen::MatrixXd> gram;  // per axis
+    Eigen::ArrayXd sxy, sxx, syy;       // lag-1 sums of the scores (Newey-West only)
+    Eigen::Index pairs = 0;
+};
+
+// Pass 1: the Gram matrix of each axis and, with `lag_sums`, the lag-1 sums of the scores that choose
+// the bandwidth. Each block's share, summed in block order.
+GramAndLagSums gram_and_lag_sums(const ScoreStream& stream, const Eigen::VectorXd& rho, bool lag_sums) {
+    const Eigen::Index p = stream.p, width = stream.width;
+    struct Share {
+        std::vector<Eigen::MatrixXd> gram;
+        Eigen::ArrayXd sxy, sxx, syy;
+        Eigen::Index pairs = 0;
+        Eigen::VectorXd first, last;  // the block's first and last score, for the pairs across blocks
+    };
+    std::vector<Share> shares(static_cast<std::size_t>(stream.blocks));
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, stream.blocks), [&](const tbb::blocked_range<Eigen::Index>& range) {
+        Eigen::MatrixXd phi, scores;
+        for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
+            const Eigen::Index size = stream.block_size(b);
+            stream.fill(b, phi);
+            Share& share = shares[static_cast<std::size_t>(b)];
+            for (int a = 0; a < stream.axes; ++a) {
+                const auto block = phi.middleRows(a * size, size);
+                share.gram.push_back(block.transpose() * block);
+            }
+            if (!lag_sums) continue;
+            stream.scores(b, phi, rho, scores);
+            share.sxy = share.sxx = share.syy = Eigen::ArrayXd::Zero(p);
+            for (Eigen::Index k = 1; k < size; ++k)
+                if (stream.continues(b * width + k)) {
+                    share.sxy += scores.col(k).array() * scores.col(k - 1).array();
+                    share.sxx += scores.col(k - 1).array().square();
+                    share.syy += scores.col(k).array().square();
+                    ++share.pairs;
+                }
+            share.first = scores.col(0);
+            share.last = scores.col(size - 1);
+        }
+    });
+    GramAndLagSums out;
+    out.gram.assign(static_cast<std::size_t>(stream.axes), Eigen::MatrixXd::Zero(p, p));
+    out.sxy = out.sxx = out.syy = Eigen::ArrayXd::Zero(p);
+    for (Eigen::Index b = 0; b < stream.blocks; ++b) {
+        const Share& share = shares[static_cast<std::size_t>(b)];
+        for (int a = 0; a < stream.axes; ++a) out.gram[static_cast<std::size_t>(a)] += share.gram[static_cast<std::size_t>(a)];
+        if (!lag_sums) continue;
+        out.sxy += share.sxy;
+        out.sxx += share.sxx;
+        out.syy += share.syy;
+        out.pairs += share.pairs;
+        if (b > 0 && stream.continues(b * width)) {
+            const Share& before = shares[static_cast<std::size_t>(b - 1)];
+            out.sxy += share.first.array() * before.last.array();
+            out.sxx += before.last.array().square();
+            out.syy += share.first.array().square();
+            ++out.pairs;
+        }
+    }
+    return out;
+}
+
+// Pass 2: sum_t s_t s_t' + s_t g_t' + g_t s_t', g_t = sum_{1 <= l < lag} (1 - l / lag) s_{t-l} within
+// the block. g_t = A_t - B_t / lag with A_t the plain and B_t the lag-weighted sum of the window, both
+// updated in O(1) per sample. Chunks of a fixed number of blocks run in parallel; each first replays
+// the window before its first sample.
+Eigen::MatrixXd newey_west_sum(const ScoreStream& stream, const Eigen::VectorXd& rho, double lag) {
+    const Eigen::Index n = stream.n, p = stream.p, width = stream.width;
+    const Eigen::Index window = lag > 1.0 ? static_cast<Eigen::Index>(std::ceil(lag)) - 1 : 0;
+    std::vector<Eigen::Index> run_starts;
+    for (Eigen::Index t = 0; t < n; ++t)
+        if (!stream.continues(t)) run_starts.push_back(t);
+    constexpr Eigen::Index chunk_blocks = 64;
+    const Eigen::Index chunks = (stream.blocks + chunk_blocks - 1) / chunk_blocks;
+    std::vector<Eigen::MatrixXd> parts(static_cast<std::size_t>(chunks));
+    tbb::parallel_for(Eigen::Index{0}, chunks, [&](Eigen::Index c) {
+        const Eigen::Index begin = c * chunk_blocks * width, end = std::min(n, (c + 1) * chunk_blocks * width);
+        const Eigen::Index run_start = *(std::upper_bound(run_starts.begin(), run_starts.end(), begin) - 1);
+        const Eigen::Index replay = std::max(run_start, begin - window);
+        Eigen::MatrixXd phi, scores, lagged, ring(p, std::max<Eigen::Index>(window, 1));
+        Eigen::VectorXd plain = Eigen::VectorXd::Zero(p), weighted = Eigen::VectorXd::Zero(p);
+        Eigen::Index filled = 0;
+        Eigen::MatrixXd part = Eigen::MatrixXd::Zero(p, p);
+        for (Eigen::Index b = replay / width; b * width < end; ++b) {
+            const Eigen::Index first = b * width, size = stream.block_size(b);
+            stream.fill(b, phi);
+            stream.scores(b, phi, rho, scores);
+            lagged.setZero(p, size);
+            for (Eigen::Index k = std::max<Eigen::Index>(0, replay - first); k < size; ++k) {
+                const Eigen::Index t = first + k;
+                if (!stream.continues(t) || t == replay) {
+                    plain.setZero();
+                    weighted.setZero();
+                    filled = 0;
+                }
+                if (window == 0) continue;
+                lagged.col(k) = plain - weighted / lag;
+                auto slot = ring.col(t % window);
+                if (filled == window) {
+                    weighted += plain + scores.col(k) - static_cast<double>(window + 1) * slot;
+                    plain += scores.col(k) - slot;
+                } else {
+                    weighted += plain + scores.col(k);
+                    plain += scores.col(k);
+                    ++filled;
+                }
+                slot = scores.col(k);
+            }
+            const Eigen::Index from = std::max<Eigen::Index>(0, begin - first);
+            if (from >= size) continue;
+            const auto s = scores.rightCols(size - from);
+            const auto g = lagged.rightCols(size - from);
+            part.noalias() += s * s.transpose();
+            part.noalias() += s * g.transpose();
+            part.noalias() += g * s.transpose();
+        }
+        parts[static_cast<std::size_t>(c)] = std::move(part);
+    });
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(p, p);
+    for (const auto& part : parts) sum += part;
+    return sum;
+}
+
 }  // namespace
 
 double LeastSquares::sum_of_squares(const Eigen::Ref<const Eigen::VectorXd>& theta) const {
@@ -163,177 +348,31 @@ ParameterUncertainty residual_uncertainty(const Eigen::MatrixXd& phi, const Eige
 ParameterUncertainty residual_uncertainty(const RegressorBlocks& regressors, const Eigen::VectorXd& residual,
                                           const Eigen::VectorXd& estimate, const RowLayout& layout,
                                           CovarianceMethod method) {
-    const Eigen::Index n = layout.samples, p = regressors.columns, rows = n * layout.axes, width = regressors.block_samples;
-    const int axes = layout.axes;
-    if (residual.size() != rows || estimate.size() != p || width < 1 || axes < 1 ||
-        (layout.block.size() != 0 && layout.block.size() != n))
+    const Eigen::Index p = regressors.columns, rows = layout.samples * layout.axes;
+    if (residual.size() != rows || estimate.size() != p || regressors.block_samples < 1 || layout.axes < 1 ||
+        (layout.block.size() != 0 && layout.block.size() != layout.samples))
         throw std::invalid_argument("parameter uncertainty: the row layout does not match the regression");
     if (rows <= p) throw std::invalid_argument("parameter uncertainty: needs more rows than parameters");
     const double dof_correction = static_cast<double>(rows) / static_cast<double>(rows - p);
-    const Eigen::Index blocks = (n + width - 1) / width;
-    auto block_size = [&](Eigen::Index b) { return std::min(width, n - b * width); };
-    // Whether sample t continues the block (segment) of sample t - 1.
-    auto continues = [&](Eigen::Index t) { return t > 0 && (layout.block.size() == 0 || layout.block[t] == layout.block[t - 1]); };
 
     ParameterUncertainty u;
     u.method = method;
-    u.axis_sigma.resize(axes);
-    u.axis_rho = Eigen::VectorXd::Zero(axes);
-    for (int a = 0; a < axes; ++a) {
-        const auto r = residual.segment(a * n, n);
-        u.axis_sigma[a] = std::sqrt(r.squaredNorm() / static_cast<double>(n));
-        double sxy = 0.0, sxx = 0.0;
-        for (Eigen::Index t = 1; t < n; ++t)
-            if (continues(t)) {
-                sxy += r[t] * r[t - 1];
-                sxx += r[t - 1] * r[t - 1];
-            }
-        u.axis_rho[a] = sxx > 0.0 ? std::clamp(sxy / sxx, -0.97, 0.97) : 0.0;
-    }
+    const ScoreStream stream(regressors, residual, layout);
+    axis_noise(stream, u.axis_sigma, u.axis_rho);
     const bool serial = method == CovarianceMethod::NeweyWest;
-
-    // Prewhitening (after Andrews & Monahan 1992), on each axis' residual series: an AR(1) fitted
-    // within blocks takes out most of the autocorrelation of closed-loop errors, and dividing the
-    // innovations by (1 - rho) recolours their sums. The whitened scores, all axes together so their
-    // correlation is kept, then get Newey-West weights. This assumes the regressors change slowly
-    // against the errors' correlation time, as at held operating points; plain Bartlett weights on
-    // strongly persistent errors underestimate the variance badly.
-    auto block_scores = [&](Eigen::Index b, const Eigen::MatrixXd& phi, Eigen::MatrixXd& scores) {
-        const Eigen::Index first = b * width, size = block_size(b);
-        scores.setZero(p, size);
-        for (int a = 0; a < axes; ++a) {
-            const double rho = u.axis_rho[a];
-            const double* r = residual.data() + a * n;
-            for (Eigen::Index k = 0; k < size; ++k) {
-                const Eigen::Index t = first + k;
-                // Prais-Winsten first term, so a block's first innovation has the same variance.
-                const double innovation = continues(t) ? r[t] - rho * r[t - 1] : std::sqrt(1.0 - rho * rho) * r[t];
-                scores.col(k) += phi.row(a * size + k).transpose() * (innovation / (1.0 - rho));
-            }
-        }
-    };
-
-    // Pass 1: the Gram matrix of each axis and, for Newey-West, the lag-1 sums of the scores that
-    // choose the bandwidth. Each block's share, summed in block order.
-    struct Share {
-        std::vector<Eigen::MatrixXd> gram;
-        Eigen::ArrayXd sxy, sxx, syy;
-        Eigen::Index pairs = 0;
-        Eigen::VectorXd first, last;  // the block's first and last score, for the pairs across blocks
-    };
-    std::vector<Share> shares(static_cast<std::size_t>(blocks));
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, blocks), [&](const tbb::blocked_range<Eigen::Index>& range) {
-        Eigen::MatrixXd phi, scores;
-        for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
-            const Eigen::Index size = block_size(b);
-            phi.resize(axes * size, p);
-            regressors.fill(b, phi);
-            Share& share = shares[static_cast<std::size_t>(b)];
-            for (int a = 0; a < axes; ++a) {
-                const auto block = phi.middleRows(a * size, size);
-                share.gram.push_back(block.transpose() * block);
-            }
-            if (!serial) continue;
-            block_scores(b, phi, scores);
-            share.sxy = share.sxx = share.syy = Eigen::ArrayXd::Zero(p);
-            for (Eigen::Index k = 1; k < size; ++k)
-                if (continues(b * width + k)) {
-                    share.sxy += scores.col(k).array() * scores.col(k - 1).array();
-                    share.sxx += scores.col(k - 1).array().square();
-                    share.syy += scores.col(k).array().square();
-                    ++share.pairs;
-                }
-            share.first = scores.col(0);
-            share.last = scores.col(size - 1);
-        }
-    });
-    std::vector<Eigen::MatrixXd> gram(static_cast<std::size_t>(axes), Eigen::MatrixXd::Zero(p, p));
-    Eigen::ArrayXd sxy = Eigen::ArrayXd::Zero(p), sxx = Eigen::ArrayXd::Zero(p), syy = Eigen::ArrayXd::Zero(p);
-    Eigen::Index pairs = 0;
-    for (Eigen::Index b = 0; b < blocks; ++b) {
-        const Share& share = shares[static_cast<std::size_t>(b)];
-        for (int a = 0; a < axes; ++a) gram[static_cast<std::size_t>(a)] += share.gram[static_cast<std::size_t>(a)];
-        if (!serial) continue;
-        sxy += share.sxy;
-        sxx += share.sxx;
-        syy += share.syy;
-        pairs += share.pairs;
-        if (b > 0 && continues(b * width)) {
-            const Share& before = shares[static_cast<std::size_t>(b - 1)];
-            sxy += share.first.array() * before.last.array();
-            sxx += before.last.array().square();
-            syy += share.first.array().square();
-            ++pairs;
-        }
-    }
-    shares.clear();
+    const GramAndLagSums sums = gram_and_lag_sums(stream, u.axis_rho, serial);
     Eigen::MatrixXd total_gram = Eigen::MatrixXd::Zero(p, p);
-    for (const auto& g : gram) total_gram += g;
+    for (const auto& g : sums.gram) total_gram += g;
     const Eigen::MatrixXd bread = gram_inverse(total_gram);
 
     Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(p, p);
     if (!serial) {
-        for (int a = 0; a < axes; ++a)
-            meat += u.axis_sigma[a] * u.axis_sigma[a] * dof_correction * gram[static_cast<std::size_t>(a)];
+        for (int a = 0; a < layout.axes; ++a)
+            meat += u.axis_sigma[a] * u.axis_sigma[a] * dof_correction * sums.gram[static_cast<std::size_t>(a)];
         u.critical_value = boost::math::quantile(boost::math::students_t(static_cast<double>(rows - p)), 0.975);
     } else {
-        u.lag = andrews_bandwidth(sxy, sxx, syy, pairs, n);
-        // Pass 2: sum_t s_t s_t' + s_t g_t' + g_t s_t', g_t = sum_{1 <= l < lag} (1 - l / lag) s_{t-l}
-        // within the block. g_t = A_t - B_t / lag with A_t the plain and B_t the lag-weighted sum of
-        // the window, both updated in O(1) per sample. Chunks of a fixed number of blocks run in
-        // parallel; each first replays the window before its first sample.
-        const Eigen::Index window = u.lag > 1.0 ? static_cast<Eigen::Index>(std::ceil(u.lag)) - 1 : 0;
-        std::vector<Eigen::Index> run_starts;
-        for (Eigen::Index t = 0; t < n; ++t)
-            if (!continues(t)) run_starts.push_back(t);
-        constexpr Eigen::Index chunk_blocks = 64;
-        const Eigen::Index chunks = (blocks + chunk_blocks - 1) / chunk_blocks;
-        std::vector<Eigen::MatrixXd> parts(static_cast<std::size_t>(chunks));
-        tbb::parallel_for(Eigen::Index{0}, chunks, [&](Eigen::Index c) {
-            const Eigen::Index begin = c * chunk_blocks * width, end = std::min(n, (c + 1) * chunk_blocks * width);
-            const Eigen::Index run_start = *(std::upper_bound(run_starts.begin(), run_starts.end(), begin) - 1);
-            const Eigen::Index replay = std::max(run_start, begin - window);
-            Eigen::MatrixXd phi, scores, lagged, ring(p, std::max<Eigen::Index>(window, 1));
-            Eigen::VectorXd plain = Eigen::VectorXd::Zero(p), weighted = Eigen::VectorXd::Zero(p);
-            Eigen::Index filled = 0;
-            Eigen::MatrixXd part = Eigen::MatrixXd::Zero(p, p);
-            for (Eigen::Index b = replay / width; b * width < end; ++b) {
-                const Eigen::Index first = b * width, size = block_size(b);
-                phi.resize(axes * size, p);
-                regressors.fill(b, phi);
-                block_scores(b, phi, scores);
-                lagged.setZero(p, size);
-                for (Eigen::Index k = std::max<Eigen::Index>(0, replay - first); k < size; ++k) {
-                    const Eigen::Index t = first + k;
-                    if (!continues(t) || t == replay) {
-                        plain.setZero();
-                        weighted.setZero();
-                        filled = 0;
-                    }
-                    if (window == 0) continue;
-                    lagged.col(k) = plain - weighted / u.lag;
-                    auto slot = ring.col(t % window);
-                    if (filled == window) {
-                        weighted += plain + scores.col(k) - static_cast<double>(window + 1) * slot;
-                        plain += scores.col(k) - slot;
-                    } else {
-                        weighted += plain + scores.col(k);
-                        plain += scores.col(k);
-                        ++filled;
-                    }
-                    slot = scores.col(k);
-                }
-                const Eigen::Index from = std::max<Eigen::Index>(0, begin - first);
-                if (from >= size) continue;
-                const auto s = scores.rightCols(size - from);
-                const auto g = lagged.rightCols(size - from);
-                part.noalias() += s * s.transpose();
-                part.noalias() += s * g.transpose();
-                part.noalias() += g * s.transpose();
-            }
-            parts[static_cast<std::size_t>(c)] = std::move(part);
-        });
-        for (const auto& part : parts) meat += part;
+        u.lag = andrews_bandwidth(sums.sxy, sums.sxx, sums.syy, sums.pairs, layout.samples);
+        meat = newey_west_sum(stream, u.axis_rho, u.lag);
         meat *= dof_correction;
         u.critical_value = 1.959963984540054;
     }

@@ -238,135 +238,183 @@ struct Polished {
     int iterations = 0;
     double rss = 0.0;  // at the result
 };
-Polished polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
-                const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
-    double rss = projection.project(w);
-    const auto m = static_cast<Eigen::Index>(moving.size());
-    if (m == 0) return {0, rss};
-    const auto& lo = model.bounds().lower;
-    const auto& hi = model.bounds().upper;
-    auto place = [&](Eigen::VectorXd& v, Eigen::Index p, double x) {
-        v[p] = periodic[static_cast<std::size_t>(p)] ? wrap_into(x, lo[p], hi[p]) : std::clamp(x, lo[p], hi[p]);
+
+class SecantPolish {
+public:
+    SecantPolish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
+                 const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic)
+        : projection_(projection), model_(model), w_(w), moving_(moving), periodic_(periodic), lo_(model.bounds().lower),
+          hi_(model.bounds().upper), m_(static_cast<Eigen::Index>(moving.size())),
+          entries_(2.0 * static_cast<double>(projection.samples())), secant_(Eigen::MatrixXd::Zero(m_, m_)) {
+        columns_.insert(columns_.end(), moving.begin(), moving.end());
+    }
+
+    Polished run() {
+        rss_ = projection_.project(w_);
+        if (m_ == 0) return {0, rss_};
+        Eigen::VectorXd values(w_.values.size());
+        int iteration = 0;
+        for (; iteration < 100; ++iteration) {
+            values = w_.values;
+            w_.reference = values.head<4>();
+            const Reduced reduced = reduce(values);
+            update_secant(reduced);
+            const auto step_on = unheld(values, reduced.gradient);
+            double new_rss = rss_;
+            const Outcome outcome = step_on.empty() ? Outcome::Failed : damped_step(reduced, step_on, values, new_rss);
+            if (outcome == Outcome::Converged) break;
+            if (outcome == Outcome::Failed) {
+                w_.values = values;
+                projection_.project(w_);
+                break;
+            }
+            remember_step(values, reduced.gradient);
+            const double gain = rss_ - new_rss;
+            rss_ = new_rss;
+            if (negligible(gain)) {
+                ++iteration;
+                break;
+            }
+        }
+        return {iteration, rss_};
+    }
+
+private:
+    // The normal equations of the moving parameters with the base parameters eliminated.
+    struct Reduced {
+        Eigen::MatrixXd normal;
+        Eigen::VectorXd gradient;  // of half the residual's sum of squares (the residual is logged minus predicted)
     };
+    enum class Outcome { Improved, Failed, Converged };
+
+    Reduced reduce(const Eigen::VectorXd& values) const {
+        const auto sums = range_normal_equations(model_, values, columns_, {0});
+        const Eigen::MatrixXd& jj = sums.gram[0];
+        const Eigen::VectorXd& jr = sums.moment[0];
+        const Eigen::MatrixXd base_inverse = scaled_pseudo_inverse(jj.topLeftCorner(4, 4));
+        const Eigen::MatrixXd cross = jj.bottomLeftCorner(m_, 4) * base_inverse;
+        return {jj.bottomRightCorner(m_, m_) - cross * jj.topRightCorner(4, m_), -(jr.tail(m_) - cross * jr.head(4))};
+    }
+
+    // Dennis, Gay and Welsch's update: S s = y - A s for the step s just taken and the change y of the
+    // gradient along it, after sizing S down to what that step saw of it.
+    void update_secant(const Reduced& r) {
+        if (last_step_.size() != m_) return;
+        const Eigen::VectorXd y = r.gradient - last_gradient_;
+        const double ys = y.dot(last_step_);
+        if (!(ys > 0.0)) return;
+        const Eigen::VectorXd left_out = y - r.normal * last_step_;
+        const double sss = last_step_.dot(secant_ * last_step_);
+        if (sss > 0.0) secant_ *= std::min(1.0, std::abs(last_step_.dot(left_out)) / sss);
+        const Eigen::VectorXd v = left_out - secant_ * last_step_;
+        secant_ += (v * y.transpose() + y * v.transpose()) / ys - (v.dot(last_step_) / (ys * ys)) * (y * y.transpose());
+    }
+
+    // The moving parameters that may step: one at a bound that the gradient pushes outward is held.
+    std::vector<Eigen::Index> unheld(const Eigen::VectorXd& values, const Eigen::VectorXd& gradient) const {
+        std::vector<Eigen::Index> out;
+        for (Eigen::Index j = 0; j < m_; ++j) {
+            const Eigen::Index p = moving_[static_cast<std::size_t>(j)];
+            const bool held = !periodic_[static_cast<std::size_t>(p)] &&
+                              ((values[p] <= lo_[p] && gradient[j] > 0.0) || (values[p] >= hi_[p] && gradient[j] < 0.0));
+            if (!held) out.push_back(j);
+        }
+        return out;
+    }
+
+    // Damped steps from `values` until one lowers the residual (w_ left there, new_rss its sum of
+    // squares), the Gauss-Newton step itself would gain nothing (converged), or no step helps.
+    Outcome damped_step(const Reduced& r, const std::vector<Eigen::Index>& step_on, const Eigen::VectorXd& values, double& new_rss) {
+        const auto f = static_cast<Eigen::Index>(step_on.size());
+        const Eigen::MatrixXd a = r.normal(step_on, step_on), s = secant_(step_on, step_on);
+        const Eigen::VectorXd g = r.gradient(step_on);
+        // The Gauss-Newton step's predicted gain, before any trial pass over the rows.
+        const Eigen::VectorXd full_step = scaled_pseudo_inverse(a) * -g;
+        if (negligible(-g.dot(full_step))) return Outcome::Converged;
+        const Eigen::VectorXd diagonal = a.diagonal().cwiseMax(1e-15 * a.diagonal().maxCoeff() + 1e-300);
+        for (int attempt = 0; attempt < 12; ++attempt) {
+            Eigen::MatrixXd damped = use_secant_ ? Eigen::MatrixXd(a + s) : a;
+            damped.diagonal() += lambda_ * diagonal;
+            const Eigen::LDLT<Eigen::MatrixXd> ldlt(damped);
+            if (use_secant_ && !(ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all())) {
+                use_secant_ = false;  // S made the model indefinite here: Gauss-Newton's alone
+                --attempt;
+                continue;
+            }
+            const Eigen::VectorXd delta = ldlt.solve(-g);
+            w_.values = values;
+            for (Eigen::Index k = 0; k < f; ++k) {
+                const Eigen::Index p = moving_[static_cast<std::size_t>(step_on[static_cast<std::size_t>(k)])];
+                place(w_.values, p, values[p] + delta[k]);
+            }
+            new_rss = delta.allFinite() ? projection_.project(w_) : std::numeric_limits<double>::infinity();
+            if (new_rss < rss_) {
+                lambda_ = std::max(lambda_ / 3.0, 1e-12);
+                // Which model to trust next: the one whose predicted gain was nearer the actual.
+                const double linear = -2.0 * g.dot(delta);
+                const double by_normal = linear - delta.dot(a * delta), by_secant = by_normal - delta.dot(s * delta);
+                const double actual = rss_ - new_rss;
+                use_secant_ = std::abs(by_secant - actual) < std::abs(by_normal - actual);
+                return Outcome::Improved;
+            }
+            lambda_ *= 4.0;
+            // A failed step that stays inside the difference stencil cannot be told from the
+            // Jacobian's own error: the optimum is found to the resolution the Jacobian has (on a
+            // dead-time band the sum of squares is rough at that scale, and a dozen ever shorter
+            // trials would each cost a pass over the rows for nothing).
+            bool inside = true;
+            for (Eigen::Index k = 0; k < f && inside; ++k) {
+                const Eigen::Index p = moving_[static_cast<std::size_t>(step_on[static_cast<std::size_t>(k)])];
+                inside = std::abs(delta[k]) <= difference_step * (hi_[p] - lo_[p]);
+            }
+            if (inside) break;
+        }
+        return Outcome::Failed;
+    }
+
+    // The step as taken (after clamping, an angle's wrap undone), for the next secant update.
+    void remember_step(const Eigen::VectorXd& values, const Eigen::VectorXd& gradient) {
+        Eigen::VectorXd taken = Eigen::VectorXd::Zero(m_);
+        for (Eigen::Index j = 0; j < m_; ++j) {
+            const Eigen::Index p = moving_[static_cast<std::size_t>(j)];
+            taken[j] = w_.values[p] - values[p];
+            if (periodic_[static_cast<std::size_t>(p)]) taken[j] = std::remainder(taken[j], hi_[p] - lo_[p]);
+        }
+        last_step_ = taken;
+        last_gradient_ = gradient;
+    }
+
+    void place(Eigen::VectorXd& v, Eigen::Index p, double x) const {
+        v[p] = periodic_[static_cast<std::size_t>(p)] ? wrap_into(x, lo_[p], hi_[p]) : std::clamp(x, lo_[p], hi_[p]);
+    }
+
     // Converged when a step can gain less than 1e-8 of one unit of chi-squared (the noise variance
     // taken as rss / residual entries), which puts the parameters within about 1e-4 of their standard
     // error of the optimum: no test or interval can see the rest, and on long logs a relative
     // criterion alone would chase digits for dozens of passes over the rows.
-    const double entries = 2.0 * static_cast<double>(projection.samples());
-    auto negligible = [&](double gain) { return gain < 1e-12 * rss || gain * entries < 1e-8 * rss; };
-    std::vector<Eigen::Index> columns{0, 1, 2, 3};
-    columns.insert(columns.end(), moving.begin(), moving.end());
-    const std::vector<Eigen::Index> all_rows{0};
-    Eigen::VectorXd values(w.values.size());
-    // The secant part: S, and the last step and gradient it is updated from.
-    Eigen::MatrixXd secant = Eigen::MatrixXd::Zero(m, m);
-    Eigen::VectorXd last_step, last_gradient;
-    bool use_secant = false;
-    double lambda = 1e-3;
-    int iteration = 0;
-    for (; iteration < 100; ++iteration) {
-        values = w.values;
-        w.reference = values.head<4>();
-        const auto sums = range_normal_equations(model, values, columns, all_rows);
-        const Eigen::MatrixXd& jj = sums.gram[0];
-        const Eigen::VectorXd& jr = sums.moment[0];
-        const Eigen::MatrixXd base_inverse = scaled_pseudo_inverse(jj.topLeftCorner(4, 4));
-        const Eigen::MatrixXd cross = jj.bottomLeftCorner(m, 4) * base_inverse;
-        const Eigen::MatrixXd normal = jj.bottomRightCorner(m, m) - cross * jj.topRightCorner(4, m);
-        // Of half the residual's sum of squares (the residual is logged minus predicted).
-        const Eigen::VectorXd gradient = -(jr.tail(m) - cross * jr.head(4));
-        if (last_step.size() == m) {
-            // Dennis, Gay and Welsch's update: S s = y - A s for the step s just taken and the change
-            // y of the gradient along it, after sizing S down to what that step saw of it.
-            const Eigen::VectorXd y = gradient - last_gradient;
-            const double ys = y.dot(last_step);
-            if (ys > 0.0) {
-                const Eigen::VectorXd left_out = y - normal * last_step;
-                const double sss = last_step.dot(secant * last_step);
-                if (sss > 0.0) secant *= std::min(1.0, std::abs(last_step.dot(left_out)) / sss);
-                const Eigen::VectorXd v = left_out - secant * last_step;
-                secant += (v * y.transpose() + y * v.transpose()) / ys - (v.dot(last_step) / (ys * ys)) * (y * y.transpose());
-            }
-        }
-        // Parameters at a bound that the gradient pushes outward are held this iteration.
-        std::vector<Eigen::Index> step_on;
-        for (Eigen::Index j = 0; j < m; ++j) {
-            const Eigen::Index p = moving[static_cast<std::size_t>(j)];
-            const bool held = !periodic[static_cast<std::size_t>(p)] &&
-                              ((values[p] <= lo[p] && gradient[j] > 0.0) || (values[p] >= hi[p] && gradient[j] < 0.0));
-            if (!held) step_on.push_back(j);
-        }
-        bool improved = false;
-        double new_rss = rss;
-        Eigen::VectorXd taken = Eigen::VectorXd::Zero(m);
-        if (!step_on.empty()) {
-            const auto f = static_cast<Eigen::Index>(step_on.size());
-            const Eigen::MatrixXd a = normal(step_on, step_on), s = secant(step_on, step_on);
-            const Eigen::VectorXd g = gradient(step_on);
-            // The Gauss-Newton step's predicted gain, before any trial pass over the rows.
-            const Eigen::VectorXd full_step = scaled_pseudo_inverse(a) * -g;
-            if (negligible(-g.dot(full_step))) break;
-            const Eigen::VectorXd diagonal = a.diagonal().cwiseMax(1e-15 * a.diagonal().maxCoeff() + 1e-300);
-            for (int attempt = 0; attempt < 12 && !improved; ++attempt) {
-                Eigen::MatrixXd damped = use_secant ? Eigen::MatrixXd(a + s) : a;
-                damped.diagonal() += lambda * diagonal;
-                const Eigen::LDLT<Eigen::MatrixXd> ldlt(damped);
-                if (use_secant && !(ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all())) {
-                    use_secant = false;  // S made the model indefinite here: Gauss-Newton's alone
-                    --attempt;
-                    continue;
-                }
-                const Eigen::VectorXd delta = ldlt.solve(-g);
-                w.values = values;
-                for (Eigen::Index r = 0; r < f; ++r) {
-                    const Eigen::Index p = moving[static_cast<std::size_t>(step_on[static_cast<std::size_t>(r)])];
-                    place(w.values, p, values[p] + delta[r]);
-                }
-                new_rss = delta.allFinite() ? projection.project(w) : std::numeric_limits<double>::infinity();
-                if (new_rss < rss) {
-                    improved = true;
-                    lambda = std::max(lambda / 3.0, 1e-12);
-                    // Which model to trust next: the one whose predicted gain was nearer the actual.
-                    const double linear = -2.0 * g.dot(delta);
-                    const double by_normal = linear - delta.dot(a * delta), by_secant = by_normal - delta.dot(s * delta);
-                    const double actual = rss - new_rss;
-                    use_secant = std::abs(by_secant - actual) < std::abs(by_normal - actual);
-                    continue;
-                }
-                lambda *= 4.0;
-                // A failed step that stays inside the difference stencil cannot be told from the
-                // Jacobian's own error: the optimum is found to the resolution the Jacobian has (on a
-                // dead-time band the sum of squares is rough at that scale, and a dozen ever shorter
-                // trials would each cost a pass over the rows for nothing).
-                bool inside = true;
-                for (Eigen::Index r = 0; r < f && inside; ++r) {
-                    const Eigen::Index p = moving[static_cast<std::size_t>(step_on[static_cast<std::size_t>(r)])];
-                    inside = std::abs(delta[r]) <= difference_step * (hi[p] - lo[p]);
-                }
-                if (inside) break;
-            }
-        }
-        if (!improved) {
-            w.values = values;
-            projection.project(w);
-            break;
-        }
-        // The step as taken (after clamping, an angle's wrap undone), for the next secant update.
-        for (Eigen::Index j = 0; j < m; ++j) {
-            const Eigen::Index p = moving[static_cast<std::size_t>(j)];
-            taken[j] = w.values[p] - values[p];
-            if (periodic[static_cast<std::size_t>(p)]) taken[j] = std::remainder(taken[j], hi[p] - lo[p]);
-        }
-        last_step = taken;
-        last_gradient = gradient;
-        const double gain = rss - new_rss;
-        rss = new_rss;
-        if (negligible(gain)) {
-            ++iteration;
-            break;
-        }
-    }
-    return {iteration, rss};
+    bool negligible(double gain) const { return gain < 1e-12 * rss_ || gain * entries_ < 1e-8 * rss_; }
+
+    const Projection& projection_;
+    const SteadyStateModel& model_;
+    Projection::Workspace& w_;
+    const std::vector<Eigen::Index>& moving_;
+    const std::vector<bool>& periodic_;
+    const Eigen::VectorXd& lo_;
+    const Eigen::VectorXd& hi_;
+    Eigen::Index m_;
+    double entries_;
+    std::vector<Eigen::Index> columns_{0, 1, 2, 3};
+    // The secant part S, and the last step and gradient it is updated from.
+    Eigen::MatrixXd secant_;
+    Eigen::VectorXd last_step_, last_gradient_;
+    bool use_secant_ = false;
+    double lambda_ = 1e-3;
+    double rss_ = 0.0;
+};
+
+Polished polish(const Projection& projection, const SteadyStateModel& model, Projection::Workspace& w,
+                const std::vector<Eigen::Index>& moving, const std::vector<bool>& periodic) {
+    return SecantPolish(projection, model, w, moving, periodic).run();
 }
 
 ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& values, const FitOptions& options) {
