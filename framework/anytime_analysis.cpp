@@ -195,29 +195,29 @@ Ecdf runtime_ecdf(const std::vector<std::vector<std::vector<std::int64_t>>>& run
     return ecdf;
 }
 
-std::string anytime_markdown(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
-    if (!info.anytime) return "";
+Document anytime_section(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
+    Document doc;
+    if (!info.anytime) return doc;
     const auto& spec = *info.anytime;
     const auto functions = anytime_functions(info);
     const auto runs = anytime_runs(records, spec.targets.size());
     const auto dimensions = dimensions_of(functions);
 
-    std::string md = "## Runtime to targets\n\n";
-    md += fmt::format("Targets are precisions f - f*; a run reaches one at the first evaluation whose best-so-far is within it. "
-                      "ERT: the evaluations of all runs until they reached the target (all their evaluations when they did not), "
-                      "divided by the runs that reached it, pooled over a function's instances; in brackets the 2.5 and 97.5 "
-                      "percentiles of {} bootstrap resamples of the runs; then runs that reached it / runs (docs/config-reference.md, \"Anytime analysis\").\n\n",
-                      spec.bootstrap);
+    doc.add(Heading{2, "Runtime to targets"});
+    doc.add(Paragraph{fmt::format("Targets are precisions f - f*; a run reaches one at the first evaluation whose best-so-far is within it. "
+                                  "ERT: the evaluations of all runs until they reached the target (all their evaluations when they did not), "
+                                  "divided by the runs that reached it, pooled over a function's instances; in brackets the 2.5 and 97.5 "
+                                  "percentiles of {} bootstrap resamples of the runs; then runs that reached it / runs (docs/config-reference.md, \"Anytime analysis\").",
+                                  spec.bootstrap)});
     for (int d : dimensions) {
-        md += fmt::format("### ERT, dimension {}\n\n| function | optimizer |", d);
-        for (double t : spec.ert_targets) md += fmt::format(" ERT to {} |", target_text(t));
-        md += "\n|---|---|";
-        for (std::size_t i = 0; i < spec.ert_targets.size(); ++i) md += "---|";
-        md += "\n";
+        doc.add(Heading{3, fmt::format("ERT, dimension {}", d)});
+        std::vector<Column> columns{"function", "optimizer"};
+        for (double t : spec.ert_targets) columns.emplace_back("ERT to " + target_text(t));
+        Table ert_table(fmt::format("ERT, dimension {}", d), std::move(columns));
         for (const auto& f : functions) {
             if (f.dimension != d) continue;
             for (const auto& o : info.optimizers) {
-                md += fmt::format("| {} | {} |", f.label, o.label);
+                std::vector<Cell> row{f.label, o.label};
                 for (double t : spec.ert_targets) {
                     const auto index = static_cast<std::size_t>(std::find(spec.targets.begin(), spec.targets.end(), t) - spec.targets.begin());
                     std::vector<RunToTarget> to_target;
@@ -225,25 +225,27 @@ std::string anytime_markdown(const ExperimentInfo& info, const std::vector<Trial
                         if (auto it = runs.find({o.label, info.problems[p].label}); it != runs.end())
                             for (const auto* r : it->second) to_target.push_back({r->anytime.hits[index], r->evaluations});
                     if (to_target.empty()) {
-                        md += " – |";
+                        row.emplace_back("–");
                         continue;
                     }
                     const auto ert = expected_running_time(to_target, spec.bootstrap,
                                                            derive_seed(info.seed, o.label, f.label + "/D" + std::to_string(d), index));
-                    md += ert.successes == 0 ? fmt::format(" inf (0/{}) |", ert.runs)
-                                             : fmt::format(" {} [{}, {}] ({}/{}) |", evaluations_text(ert.value), evaluations_text(ert.low),
-                                                           evaluations_text(ert.high), ert.successes, ert.runs);
+                    row.emplace_back(ert.successes == 0 ? fmt::format("inf (0/{})", ert.runs)
+                                                        : fmt::format("{} [{}, {}] ({}/{})", evaluations_text(ert.value), evaluations_text(ert.low),
+                                                                      evaluations_text(ert.high), ert.successes, ert.runs));
                 }
-                md += "\n";
+                ert_table.add_row(std::move(row));
             }
         }
-        md += "\n";
+        doc.add(std::move(ert_table));
     }
 
-    md += fmt::format("### Runtime ECDF at the end of the budget\n\nThe fraction of (run, target) pairs reached over the {} "
-                      "targets ({} to {}), averaged over the functions of a dimension, with the 2.5 and 97.5 bootstrap "
-                      "percentiles; the ecdf_D* plots show it against the budget.\n\n| dimension | optimizer | functions | reached | 95 % interval |\n|---|---|---|---|---|\n",
-                      spec.targets.size(), target_text(spec.targets.front()), target_text(spec.targets.back()));
+    doc.add(Heading{3, "Runtime ECDF at the end of the budget"});
+    doc.add(Paragraph{fmt::format("The fraction of (run, target) pairs reached over the {} "
+                                  "targets ({} to {}), averaged over the functions of a dimension, with the 2.5 and 97.5 bootstrap "
+                                  "percentiles; the ecdf_D* plots show it against the budget.",
+                                  spec.targets.size(), target_text(spec.targets.front()), target_text(spec.targets.back()))});
+    Table ecdf_table("runtime ECDF at the end of the budget", {"dimension", "optimizer", "functions", "reached", "95 % interval"});
     for (int d : dimensions) {
         std::vector<const AnytimeFunction*> of_dimension;
         for (const auto& f : functions)
@@ -255,10 +257,12 @@ std::string anytime_markdown(const ExperimentInfo& info, const std::vector<Trial
             if (with_runs == 0) continue;
             // One budget past every run: the fraction reached at the end.
             const auto ecdf = runtime_ecdf(hits, d, {infinity}, spec.bootstrap, derive_seed(info.seed, o.label, "ecdf/D" + std::to_string(d), 0));
-            md += fmt::format("| {} | {} | {} | {:.3f} | [{:.3f}, {:.3f}] |\n", d, o.label, with_runs, ecdf.value[0], ecdf.low[0], ecdf.high[0]);
+            ecdf_table.add_row({std::to_string(d), o.label, std::to_string(with_runs), fmt::format("{:.3f}", ecdf.value[0]),
+                                fmt::format("[{:.3f}, {:.3f}]", ecdf.low[0], ecdf.high[0])});
         }
     }
-    return md + "\n";
+    doc.add(std::move(ecdf_table));
+    return doc;
 }
 
 void write_ecdf_plots(const fs::path& directory, const fs::path& data_dir, const ExperimentInfo& info,

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/report_document.hpp"
 #include "framework/results_store.hpp"
 
 namespace mhb {
@@ -50,8 +51,9 @@ struct Ecdf {
 Ecdf runtime_ecdf(const std::vector<std::vector<std::vector<std::int64_t>>>& runs, int dimension,
                   const std::vector<double>& budgets, int bootstrap, std::uint64_t seed);
 
-// The ERT tables and the ECDF at the end of the budget, as a Markdown section ("" without [anytime]).
-std::string anytime_markdown(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
+// The ERT tables and the ECDF at the end of the budget, as a section of table.md (no blocks without
+// [anytime]).
+Document anytime_section(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 
 // ecdf_D<d>.png/.svg per dimension, drawn by `render(base, gnuplot body, width, height)`; the data
 // beside the other plots' in `data_dir`.

@@ -53,11 +53,11 @@ void add_configuration(HtmlReport& page, const fs::path& directory, const Experi
 
 }  // namespace
 
-fs::path write_experiment_report(const fs::path& directory, const ExperimentInfo& info, const std::string& tables_markdown,
+fs::path write_experiment_report(const fs::path& directory, const ExperimentInfo& info, const Document& tables,
                                  const ExperimentPlots& plots) {
     HtmlReport page;
     add_provenance(page, directory, info);
-    page.add_markdown(tables_markdown, directory);
+    page.add_document(tables, directory);
     page.add_heading(2, "Plots");
     if (plots.images.empty()) page.add_paragraph(plots.absent_because);
     for (const auto& png : plots.images) {

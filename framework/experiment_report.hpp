@@ -1,11 +1,12 @@
 #pragma once
 // report.html of a results directory, for people: where the results came from, the tables (from the
-// Markdown of table.md, so the two never say different things), the plots inline and the configuration
+// document table.md is written from, so the two never say different things), the plots inline and the configuration
 // the run read. One file that opens offline in any browser.
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "framework/report_document.hpp"
 #include "framework/results_store.hpp"
 
 namespace mhb {
@@ -18,6 +19,6 @@ struct ExperimentPlots {
 // Writes `directory`/report.html and returns its path; InputError when a plot cannot be read or the
 // file cannot be written.
 std::filesystem::path write_experiment_report(const std::filesystem::path& directory, const ExperimentInfo& info,
-                                              const std::string& tables_markdown, const ExperimentPlots& plots);
+                                              const Document& tables, const ExperimentPlots& plots);
 
 }  // namespace mhb

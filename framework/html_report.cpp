@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <variant>
 
 #include <fmt/format.h>
 
@@ -104,8 +105,6 @@ std::string_view trim(std::string_view s) {
     return s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
 }
 
-bool starts_with(std::string_view s, std::string_view prefix) { return s.substr(0, prefix.size()) == prefix; }
-
 // Text with the reports' inline Markdown: `code` and **bold**; a marker without its closing twin is text.
 std::string inline_html(std::string_view text) {
     std::string out;
@@ -148,53 +147,6 @@ std::optional<double> leading_number(std::string_view cell) {
 std::string sort_key(double v) {
     if (std::isinf(v)) return v > 0 ? "Infinity" : "-Infinity";
     return fmt::format("{}", v);
-}
-
-// A Markdown table row: cells between unescaped bars, "\|" read as a bar.
-std::vector<std::string> table_cells(std::string_view line) {
-    line = trim(line);
-    if (starts_with(line, "|")) line.remove_prefix(1);
-    if (line.size() >= 1 && line.back() == '|' && !(line.size() >= 2 && line[line.size() - 2] == '\\')) line.remove_suffix(1);
-    std::vector<std::string> cells;
-    std::string cell;
-    for (std::size_t i = 0; i < line.size(); ++i) {
-        if (line[i] == '\\' && i + 1 < line.size() && line[i + 1] == '|') {
-            cell += '|';
-            ++i;
-        } else if (line[i] == '|') {
-            cells.emplace_back(trim(cell));
-            cell.clear();
-        } else {
-            cell += line[i];
-        }
-    }
-    cells.emplace_back(trim(cell));
-    return cells;
-}
-
-bool table_rule(std::string_view line) {
-    line = trim(line);
-    return !line.empty() && line.find_first_not_of("|-: ") == std::string_view::npos && line.find('-') != std::string_view::npos;
-}
-
-// ![caption](file) alone on a line.
-std::optional<std::pair<std::string, std::string>> markdown_image(std::string_view line) {
-    line = trim(line);
-    if (!starts_with(line, "![") || line.back() != ')') return std::nullopt;
-    const auto middle = line.find("](");
-    if (middle == std::string_view::npos) return std::nullopt;
-    return std::pair{std::string(line.substr(2, middle - 2)), std::string(line.substr(middle + 2, line.size() - middle - 3))};
-}
-
-// 1 to 6 for "# text" to "###### text", else 0.
-int heading_level(std::string_view line) {
-    const auto hashes = line.find_first_not_of('#');
-    if (hashes == 0 || hashes > 6 || hashes == std::string_view::npos || line[hashes] != ' ') return 0;
-    return static_cast<int>(hashes);
-}
-
-bool starts_block(std::string_view line) {
-    return heading_level(line) > 0 || starts_with(trim(line), "|") || starts_with(line, "- ") || starts_with(line, "    ") || markdown_image(line);
 }
 
 // One attribute of a start tag, as written.
@@ -307,16 +259,6 @@ std::string html_escape(std::string_view text) {
     return out;
 }
 
-std::string markdown_table_cell(std::string_view text) {
-    std::string out;
-    out.reserve(text.size());
-    for (char c : text) {
-        if (c == '|') out += "\\|";
-        else out += c == '\n' || c == '\r' ? ' ' : c;
-    }
-    return out;
-}
-
 std::string inline_svg(std::string_view svg, const std::string& id_prefix, const std::string& source) {
     std::size_t start = svg.find("<svg");
     while (start != std::string_view::npos && start + 4 < svg.size() && !std::isspace(static_cast<unsigned char>(svg[start + 4])) &&
@@ -376,16 +318,15 @@ void HtmlReport::add_list(const std::vector<std::string>& items) {
 
 void HtmlReport::add_preformatted(const std::string& text) { body_ += "<pre>" + html_escape(text) + "</pre>\n"; }
 
-void HtmlReport::add_table(const HtmlTable& table) {
+void HtmlReport::add_table(const Table& table) {
     ++tables_;
     body_ += "<div class=\"table-box\"><table>\n<thead><tr>";
-    for (const auto& h : table.header) body_ += "<th scope=\"col\">" + inline_html(h) + "</th>";
+    for (const auto& column : table.columns()) body_ += "<th scope=\"col\">" + inline_html(column.label()) + "</th>";
     body_ += "</tr></thead>\n<tbody>\n";
-    const std::size_t columns = table.header.size();
-    for (const auto& row : table.rows) {
+    for (const auto& row : table.rows()) {
         body_ += "<tr>";
-        for (std::size_t c = 0; c < std::max(columns, row.size()); ++c) {
-            const std::string_view cell = c < row.size() ? trim(row[c]) : std::string_view();
+        for (const auto& c : row) {
+            const std::string_view cell = trim(c.text);
             if (missing_value(cell)) body_ += "<td class=\"number\" data-sort=\"\">" + html_escape(cell) + "</td>";
             else if (const auto number = leading_number(cell))
                 body_ += "<td class=\"number\" data-sort=\"" + sort_key(*number) + "\">" + inline_html(cell) + "</td>";
@@ -394,6 +335,7 @@ void HtmlReport::add_table(const HtmlTable& table) {
         body_ += "</tr>\n";
     }
     body_ += "</tbody>\n</table></div>\n";
+    for (const auto& note : table.notes()) add_paragraph(note);
 }
 
 void HtmlReport::add_plot(const fs::path& svg, const std::string& caption) {
@@ -409,55 +351,35 @@ void HtmlReport::add_details(const std::string& summary, const std::string& text
     body_ += "<details>\n<summary>" + inline_html(summary) + "</summary>\n<pre>" + html_escape(text) + "</pre>\n</details>\n";
 }
 
-void HtmlReport::add_markdown(std::string_view markdown, const fs::path& image_directory) {
-    std::vector<std::string_view> lines;
-    for (std::size_t start = 0; start <= markdown.size();) {
-        auto end = markdown.find('\n', start);
-        if (end == std::string_view::npos) end = markdown.size();
-        auto line = markdown.substr(start, end - start);
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        lines.push_back(line);
-        start = end + 1;
-    }
-    auto blank = [](std::string_view line) { return trim(line).empty(); };
-    for (std::size_t i = 0; i < lines.size();) {
-        const std::string_view line = lines[i];
-        if (blank(line)) {
-            ++i;
-        } else if (starts_with(line, "    ")) {
-            // Blank lines inside a code block belong to it when more code follows.
-            std::string code;
-            std::size_t end = i;
-            for (std::size_t j = i; j < lines.size() && (starts_with(lines[j], "    ") || blank(lines[j])); ++j)
-                if (!blank(lines[j])) end = j + 1;
-            for (; i < end; ++i) code += std::string(lines[i].substr(std::min<std::size_t>(4, lines[i].size()))) + "\n";
-            code.pop_back();
-            add_preformatted(code);
-        } else if (const int level = heading_level(line)) {
-            const std::string text(trim(line.substr(static_cast<std::size_t>(level))));
-            if (level == 1 && title_.empty()) title_ = text;
-            else add_heading(level, text);
-            ++i;
-        } else if (starts_with(trim(line), "|")) {
-            HtmlTable table;
-            table.header = table_cells(line);
-            ++i;
-            if (i < lines.size() && table_rule(lines[i])) ++i;
-            for (; i < lines.size() && starts_with(trim(lines[i]), "|"); ++i) table.rows.push_back(table_cells(lines[i]));
-            add_table(table);
-        } else if (starts_with(line, "- ")) {
-            std::vector<std::string> items;
-            for (; i < lines.size() && starts_with(lines[i], "- "); ++i) items.emplace_back(trim(lines[i].substr(2)));
-            add_list(items);
-        } else if (const auto image = markdown_image(line)) {
-            add_plot((image_directory / image->second).replace_extension(".svg"), image->first);
-            ++i;
-        } else {
-            std::string text(trim(line));
-            for (++i; i < lines.size() && !blank(lines[i]) && !starts_block(lines[i]); ++i) text += " " + std::string(trim(lines[i]));
-            add_paragraph(text);
+void HtmlReport::add_document(const Document& document, const fs::path& image_directory) {
+    struct Add {
+        HtmlReport& page;
+        const fs::path& images;
+        void operator()(const Heading& h) const {
+            if (h.level == 1 && page.title_.empty()) page.title_ = h.text;
+            else page.add_heading(h.level, h.text);
         }
-    }
+        // A paragraph's lines read as one line, as they do in Markdown.
+        void operator()(const Paragraph& p) const {
+            std::string text;
+            for (std::size_t start = 0; start <= p.text.size();) {
+                auto end = p.text.find('\n', start);
+                if (end == std::string::npos) end = p.text.size();
+                const auto line = trim(std::string_view(p.text).substr(start, end - start));
+                if (!line.empty()) text += (text.empty() ? "" : " ") + std::string(line);
+                start = end + 1;
+            }
+            if (!text.empty()) page.add_paragraph(text);
+        }
+        void operator()(const Table& t) const { page.add_table(t); }
+        void operator()(const Image& i) const { page.add_plot((images / i.file).replace_extension(".svg"), i.caption); }
+        // Markdown shows an empty list as a blank line; a page, as nothing.
+        void operator()(const BulletList& l) const {
+            if (!l.items.empty()) page.add_list(l.items);
+        }
+        void operator()(const Preformatted& p) const { page.add_preformatted(p.text); }
+    };
+    for (const auto& block : document.blocks()) std::visit(Add{*this, image_directory}, block);
 }
 
 std::string HtmlReport::html() const {

@@ -8,12 +8,9 @@
 #include <utility>
 #include <vector>
 
-namespace mhb {
+#include "framework/report_document.hpp"
 
-struct HtmlTable {
-    std::vector<std::string> header;
-    std::vector<std::vector<std::string>> rows;  // a short row is padded with empty cells
-};
+namespace mhb {
 
 class HtmlReport {
 public:
@@ -31,18 +28,17 @@ public:
     // Cells that start with a number (e.g. "1.5e-05", "10 (2 failed)", "0.50 (large)") are right-aligned
     // and carry it in data-sort; "", "–", "—" and "-" mark a missing value, which sorts last. A column
     // whose cells all carry data-sort sorts numerically, any other column as text.
-    void add_table(const HtmlTable& table);
+    // Notes follow the table as paragraphs.
+    void add_table(const Table& table);
     // Inlines the SVG file as a figure scaled to the page's width (up to a quarter wider than drawn);
     // InputError when it cannot be read or is not an SVG image.
     void add_plot(const std::filesystem::path& svg, const std::string& caption);
     // A collapsed block of preformatted text, e.g. the configuration an experiment ran from.
     void add_details(const std::string& summary, const std::string& text);
 
-    // Adds Markdown in the subset mhbench's reports are written in: # headings (the first level-1
-    // heading becomes the page's title when it has none), paragraphs, "- " lists, pipe tables ("\|" is a
-    // literal bar), code indented by four spaces, and images on a line of their own, ![caption](plot.png),
-    // drawn from the SVG beside the PNG in `image_directory`.
-    void add_markdown(std::string_view markdown, const std::filesystem::path& image_directory);
+    // Adds each block of the document: the first level-1 heading becomes the page's title when it has
+    // none, and an image is drawn from the SVG beside its PNG in `image_directory`.
+    void add_document(const Document& document, const std::filesystem::path& image_directory);
 
     std::size_t table_count() const { return tables_; }
     std::size_t plot_count() const { return plots_; }
@@ -61,11 +57,6 @@ private:
 
 // Text for HTML element content and quoted attribute values: & < > " ' escaped.
 std::string html_escape(std::string_view text);
-
-// Text for a cell of a Markdown pipe table: bars escaped ("\|") and line breaks made blanks, so that a
-// label from a config or a data file can neither split nor end its row (in table.md, report.md and
-// the pages add_markdown makes of them).
-std::string markdown_table_cell(std::string_view text);
 
 // An SVG document made ready to sit inside a page: the XML prolog, DOCTYPE and comments before the
 // <svg> element dropped; the root's width and height replaced by a viewBox (kept when present) and a

@@ -9,7 +9,6 @@
 
 #include "framework/anytime_analysis.hpp"
 #include "framework/file_output.hpp"
-#include "framework/html_report.hpp"
 #include "framework/input_error.hpp"
 #include "framework/statistics.hpp"
 
@@ -125,121 +124,132 @@ TrialGroups group_trials(const ExperimentInfo& info, const std::vector<TrialReco
     return g;
 }
 
-std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
+Document tables_document(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
     const auto groups = group_trials(info, records);
     const auto summaries = summarize_groups(info, groups);
-    std::string md = fmt::format("# {}\n\n", info.name);
-    if (!info.description.empty()) md += info.description + "\n\n";
+    Document doc;
+    doc.add(Heading{1, info.name});
+    if (!info.description.empty()) doc.add(Paragraph{info.description});
     const std::string evaluations = info.evaluations_per_dimension > 0
                                         ? fmt::format("{} x dimension", info.evaluations_per_dimension)
                                         : fmt::format("{}", info.budget.max_evaluations);
     const bool evaluation_limit = info.budget.max_evaluations > 0 || info.evaluations_per_dimension > 0;
-    md += fmt::format("Config `{}`; {} trial{} per pair; master seed {}; budget: {}.\n\n",
-                      std::filesystem::path(info.config_file).filename().string(), info.trials, info.trials == 1 ? "" : "s", info.seed,
-                      evaluation_limit ? (info.budget.max_iterations > 0 ? fmt::format("{} iterations or {} evaluations, whichever first",
-                                                                                       info.budget.max_iterations, evaluations)
-                                                                         : fmt::format("{} function evaluations", evaluations))
-                                       : fmt::format("{} iterations", info.budget.max_iterations));
-    md += "Columns: final fitness statistics over the successful trials (minus the known optimum f* where "
-          "there is one), the mean number of function evaluations used, two-sided Wilcoxon rank-sum p-values and "
-          "Vargha-Delaney A12 (probability that a run of the row's optimiser ends lower than one of the reference) "
-          "against each reference optimiser, and run time.\n\n";
+    doc.add(Paragraph{fmt::format("Config `{}`; {} trial{} per pair; master seed {}; budget: {}.",
+                                  std::filesystem::path(info.config_file).filename().string(), info.trials, info.trials == 1 ? "" : "s", info.seed,
+                                  evaluation_limit ? (info.budget.max_iterations > 0 ? fmt::format("{} iterations or {} evaluations, whichever first",
+                                                                                                   info.budget.max_iterations, evaluations)
+                                                                                     : fmt::format("{} function evaluations", evaluations))
+                                                   : fmt::format("{} iterations", info.budget.max_iterations))});
+    doc.add(Paragraph{"Columns: final fitness statistics over the successful trials (minus the known optimum f* where "
+                      "there is one), the mean number of function evaluations used, two-sided Wilcoxon rank-sum p-values and "
+                      "Vargha-Delaney A12 (probability that a run of the row's optimiser ends lower than one of the reference) "
+                      "against each reference optimiser, and run time."});
 
     if (!info.per_problem)
-        md += fmt::format("Per-problem tables are off (analysis.per_problem = false): table.csv has a row for each of the {} "
-                          "problems and each optimiser.\n\n",
-                          info.problems.size());
+        doc.add(Paragraph{fmt::format("Per-problem tables are off (analysis.per_problem = false): table.csv has a row for each of the {} "
+                                      "problems and each optimiser.",
+                                      info.problems.size())});
     for (std::size_t p = 0; p < (info.per_problem ? info.problems.size() : 0); ++p) {
         const auto& prob = info.problems[p];
-        md += fmt::format("## {}\n\n", prob.label);
-        if (!prob.description.empty()) md += prob.description + "\n\n";
-        md += fmt::format("Dimension {}", prob.dimension);
-        if (prob.truth.optimum_value) md += fmt::format("; known optimum f* = {}", num(*prob.truth.optimum_value));
-        md += ".\n\n";
+        doc.add(Heading{2, prob.label});
+        if (!prob.description.empty()) doc.add(Paragraph{prob.description});
+        doc.add(Paragraph{fmt::format("Dimension {}{}.", prob.dimension,
+                                      prob.truth.optimum_value ? fmt::format("; known optimum f* = {}", num(*prob.truth.optimum_value)) : "")});
         const bool shifted = prob.truth.optimum_value.has_value();
-        std::string header = "| Optimizer | runs | mean" + std::string(shifted ? " f−f*" : " f") +
-                             " | std | median | best | worst | evaluations |";
-        std::string rule = "|---|---|---|---|---|---|---|---|";
+        std::vector<Column> columns{"Optimizer", "runs", shifted ? "mean f−f*" : "mean f", "std", "median", "best", "worst", "evaluations"};
         for (const auto& ref : info.references) {
-            header += fmt::format(" p vs {0} | A12 vs {0} |", markdown_table_cell(ref));
-            rule += "---|---|";
+            columns.emplace_back("p vs " + ref);
+            columns.emplace_back("A12 vs " + ref);
         }
-        header += " time/trial (s) |";
-        rule += "---|";
-        md += header + "\n" + rule + "\n";
+        columns.emplace_back("time/trial", "s");
+        Table results(prob.label + ": final error per optimiser", std::move(columns));
         for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
             const auto& g = summaries[p][o];
             const auto& s = g.error;
             std::string runs = std::to_string(g.runs);
             if (g.failed) runs += fmt::format(" ({} failed)", g.failed);
-            md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |", markdown_table_cell(info.optimizers[o].label), runs,
-                              s.n ? num(s.mean) : "–", s.n ? num(s.sd) : "–", s.n ? num(s.median) : "–",
-                              s.n ? num(s.min) : "–", s.n ? num(s.max) : "–", num(g.mean_evaluations));
-            for (const auto& v : g.versus)
-                md += v ? fmt::format(" {} | {:.2f} ({}) |", pval(v->p), v->a12, stats::a12_magnitude(v->a12)) : " – | – |";
-            md += fmt::format(" {} |\n", num(g.mean_seconds()));
+            std::vector<Cell> row{info.optimizers[o].label, runs, s.n ? num(s.mean) : "–", s.n ? num(s.sd) : "–", s.n ? num(s.median) : "–",
+                                  s.n ? num(s.min) : "–", s.n ? num(s.max) : "–", num(g.mean_evaluations)};
+            for (const auto& v : g.versus) {
+                row.emplace_back(v ? pval(v->p) : "–");
+                row.emplace_back(v ? fmt::format("{:.2f} ({})", v->a12, stats::a12_magnitude(v->a12)) : "–");
+            }
+            row.emplace_back(num(g.mean_seconds()));
+            results.add_row(std::move(row));
         }
-        md += "\n";
+        doc.add(std::move(results));
 
         const auto& target = accuracy_target(prob);
         if (prob.named_parameters && (target || prob.truth.reference_solution)) {
-            md += fmt::format("### {}: identified parameters (mean over trials, error % against {}, std)\n\n", prob.label,
-                              prob.truth.true_parameters ? "the true values" : prob.truth.reference_label);
-            std::string h = "| |", r2 = "|---|";
-            for (const auto& n : prob.parameter_names) {
-                h += fmt::format(" {0} mean | {0} err % | {0} std |", markdown_table_cell(n));
-                r2 += "---|---|---|";
-            }
-            h += " fitness mean | fitness std | time total (s) |";
-            r2 += "---|---|---|";
-            md += h + "\n" + r2 + "\n";
-            auto fixed_row = [&](const std::string& label, const Vector& v, std::optional<double> fitness) {
-                std::string row = "| " + markdown_table_cell(label) + " |";
+            const std::string title = fmt::format("{}: identified parameters (mean over trials, error % against {}, std)", prob.label,
+                                                  prob.truth.true_parameters ? "the true values" : prob.truth.reference_label);
+            doc.add(Heading{3, title});
+            std::vector<Column> parameter_columns{""};
+            for (const auto& n : prob.parameter_names)
+                for (const char* what : {" mean", " err %", " std"}) parameter_columns.emplace_back(n + what);
+            parameter_columns.emplace_back("fitness mean");
+            parameter_columns.emplace_back("fitness std");
+            parameter_columns.emplace_back("time total", "s");
+            Table parameters(title, std::move(parameter_columns));
+            // Truth and reference are single values: no spread, no time.
+            auto add_fixed_row = [&](const std::string& label, const Vector& v, std::optional<double> fitness) {
+                std::vector<Cell> row{label};
                 for (Eigen::Index j = 0; j < v.size(); ++j) {
-                    row += fmt::format(" {} | {:.3g} | |", num(v[j]), error_percent(v[j], target, j));
+                    row.emplace_back(num(v[j]));
+                    row.emplace_back(fmt::format("{:.3g}", error_percent(v[j], target, j)));
+                    row.push_back(Cell::none());
                 }
-                row += fmt::format(" {} | | |\n", fitness ? num(*fitness) : "");
-                return row;
+                row.emplace_back(fitness ? num(*fitness) : "");
+                row.push_back(Cell::none());
+                row.push_back(Cell::none());
+                parameters.add_row(std::move(row));
             };
-            if (prob.truth.true_parameters) md += fixed_row("truth", *prob.truth.true_parameters, std::nullopt);
+            if (prob.truth.true_parameters) add_fixed_row("truth", *prob.truth.true_parameters, std::nullopt);
             if (prob.truth.reference_solution)
-                md += fixed_row(prob.truth.reference_label.empty() ? "reference" : prob.truth.reference_label,
-                                *prob.truth.reference_solution, prob.truth.reference_fitness);
+                add_fixed_row(prob.truth.reference_label.empty() ? "reference" : prob.truth.reference_label, *prob.truth.reference_solution,
+                              prob.truth.reference_fitness);
             for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                 const auto& g = summaries[p][o];
                 if (!g.runs) continue;
-                std::string row = "| " + markdown_table_cell(info.optimizers[o].label) + " |";
+                std::vector<Cell> row{info.optimizers[o].label};
                 for (int j = 0; j < prob.dimension; ++j) {
                     const auto& s = g.parameters[static_cast<std::size_t>(j)];
-                    row += fmt::format(" {} | {:.3g} | {} |", num(s.mean), error_percent(s.mean, target, j), num(s.sd));
+                    row.emplace_back(num(s.mean));
+                    row.emplace_back(fmt::format("{:.3g}", error_percent(s.mean, target, j)));
+                    row.emplace_back(num(s.sd));
                 }
-                row += fmt::format(" {} | {} | {} |\n", num(g.fitness.mean), num(g.fitness.sd), num(g.total_seconds));
-                md += row;
+                row.emplace_back(num(g.fitness.mean));
+                row.emplace_back(num(g.fitness.sd));
+                row.emplace_back(num(g.total_seconds));
+                parameters.add_row(std::move(row));
             }
             for (const auto& pub : info.published) {
                 if (pub.problem != prob.label) continue;
-                std::string row = "| " + markdown_table_cell(pub.label) + " |";
+                std::vector<Cell> row{pub.label};
                 for (int j = 0; j < prob.dimension; ++j) {
                     const auto& n = prob.parameter_names[static_cast<std::size_t>(j)];
                     auto m = pub.mean.find(n);
                     auto d = pub.sd.find(n);
                     const double err = m != pub.mean.end() ? error_percent(m->second, target, j) : std::nan("");
-                    row += fmt::format(" {} | {} | {} |", m != pub.mean.end() ? num(m->second) : "–", fmt::format("{:.3g}", err),
-                                       d != pub.sd.end() ? num(d->second) : "–");
+                    row.emplace_back(m != pub.mean.end() ? num(m->second) : "–");
+                    row.emplace_back(fmt::format("{:.3g}", err));
+                    row.emplace_back(d != pub.sd.end() ? num(d->second) : "–");
                 }
-                row += fmt::format(" {} | {} | {} |\n", pub.fitness_mean ? num(*pub.fitness_mean) : "–",
-                                   pub.fitness_sd ? num(*pub.fitness_sd) : "–", pub.time_total ? fmt::format("{:.3f}", *pub.time_total) : "–");
-                md += row;
+                row.emplace_back(pub.fitness_mean ? num(*pub.fitness_mean) : "–");
+                row.emplace_back(pub.fitness_sd ? num(*pub.fitness_sd) : "–");
+                row.emplace_back(pub.time_total ? fmt::format("{:.3f}", *pub.time_total) : "–");
+                parameters.add_row(std::move(row));
             }
             std::set<std::string> sources;
             for (const auto& pub : info.published)
                 if (pub.problem == prob.label) sources.insert(pub.source);
             for (const auto& src : sources)
-                md += fmt::format("\nRows marked as published are quoted from {}, with the error % recomputed against the truth above; "
-                                  "their fitness values come from the paper's own fitness function, which may differ from ours.\n", src);
-            md += "\n";
+                parameters.add_note(fmt::format("Rows marked as published are quoted from {}, with the error % recomputed against the truth above; "
+                                                "their fitness values come from the paper's own fitness function, which may differ from ours.",
+                                                src));
+            doc.add(std::move(parameters));
             if (prob.truth.reference_fitness) {
-                md += fmt::format("Gap to the {} (fitness {}): ", prob.truth.reference_label, num(*prob.truth.reference_fitness));
+                std::string gap = fmt::format("Gap to the {} (fitness {}): ", prob.truth.reference_label, num(*prob.truth.reference_fitness));
                 std::vector<std::string> parts;
                 for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                     const auto& trials = groups.ok[p][o];
@@ -247,15 +257,15 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
                     std::vector<double> gaps;
                     std::size_t reached = 0;
                     for (const auto* t : trials) {
-                        const double gap = t->best_fitness - *prob.truth.reference_fitness;
-                        gaps.push_back(gap);
-                        if (gap <= 1e-6 * std::max(1e-300, std::abs(*prob.truth.reference_fitness))) ++reached;
+                        const double difference = t->best_fitness - *prob.truth.reference_fitness;
+                        gaps.push_back(difference);
+                        if (difference <= 1e-6 * std::max(1e-300, std::abs(*prob.truth.reference_fitness))) ++reached;
                     }
                     parts.push_back(fmt::format("{} mean gap {}, {}/{} trials within 1e-6 relative", info.optimizers[o].label,
                                                 num(stats::summarize(gaps).mean), reached, trials.size()));
                 }
-                for (std::size_t i = 0; i < parts.size(); ++i) md += (i ? "; " : "") + parts[i];
-                md += ".\n\n";
+                for (std::size_t i = 0; i < parts.size(); ++i) gap += (i ? "; " : "") + parts[i];
+                doc.add(Paragraph{gap + "."});
             }
         }
     }
@@ -273,16 +283,16 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
         }
         if (scores.size() >= 2) {
             const auto f = stats::friedman(scores);
-            md += fmt::format("## Friedman mean ranks over {} problems (by mean final fitness; 1 = best)\n\n", scores.size());
-            md += "| Optimizer | mean rank |\n|---|---|\n";
-            for (std::size_t o = 0; o < info.optimizers.size(); ++o)
-                md += fmt::format("| {} | {:.2f} |\n", markdown_table_cell(info.optimizers[o].label), f.mean_ranks[o]);
-            md += fmt::format("\nFriedman chi-square = {:.3f}, {} degrees of freedom, p = {}.\n\n", f.chi_square,
-                              info.optimizers.size() - 1, pval(f.p));
+            doc.add(Heading{2, fmt::format("Friedman mean ranks over {} problems (by mean final fitness; 1 = best)", scores.size())});
+            Table ranks("Friedman mean ranks", {"Optimizer", "mean rank"});
+            for (std::size_t o = 0; o < info.optimizers.size(); ++o) ranks.add_row({info.optimizers[o].label, fmt::format("{:.2f}", f.mean_ranks[o])});
+            doc.add(std::move(ranks));
+            doc.add(Paragraph{fmt::format("Friedman chi-square = {:.3f}, {} degrees of freedom, p = {}.", f.chi_square, info.optimizers.size() - 1,
+                                          pval(f.p))});
         }
     }
 
-    md += anytime_markdown(info, records);
+    doc.append(anytime_section(info, records));
 
     double total = 0;
     std::size_t n = 0, failed = 0;
@@ -292,47 +302,40 @@ std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialR
             n += g.runs;
             failed += g.failed;
         }
-    md += fmt::format("Total: {} successful trials, {} failed; {:.3f} s of trial time (summed over threads).\n", n, failed, total);
-    return md;
+    doc.add(Paragraph{fmt::format("Total: {} successful trials, {} failed; {:.3f} s of trial time (summed over threads).", n, failed, total)});
+    return doc;
 }
 
-std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
+std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
+    return markdown(tables_document(info, records));
+}
+
+Table results_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
     const auto summaries = summarize_groups(info, group_trials(info, records));
-    std::vector<std::string> columns{"problem", "optimizer", "runs", "failed", "mean", "std", "median", "best", "worst",
-                                     "mean_evaluations"};
+    std::vector<std::string> names{"problem", "optimizer", "runs", "failed", "mean", "std", "median", "best", "worst", "mean_evaluations"};
     for (const auto& ref : info.references) {
-        columns.push_back("p_vs_" + ref);
-        columns.push_back("a12_vs_" + ref);
+        names.push_back("p_vs_" + ref);
+        names.push_back("a12_vs_" + ref);
     }
     std::set<std::string> param_columns;
-    std::vector<std::string> param_order;
     for (const auto& prob : info.problems)
         if (prob.named_parameters)
             for (const auto& n : prob.parameter_names)
                 for (const char* suffix : {"_mean", "_err_pct", "_std"})
-                    if (param_columns.insert(n + suffix).second) param_order.push_back(n + suffix);
-    columns.insert(columns.end(), param_order.begin(), param_order.end());
-    columns.push_back("mean_time_s");
-    columns.push_back("total_time_s");
+                    if (param_columns.insert(n + suffix).second) names.push_back(n + suffix);
+    names.push_back("mean_time_s");
+    names.push_back("total_time_s");
 
-    auto quote = [](const std::string& s) {
-        if (s.find_first_of(",\"\n") == std::string::npos) return s;
-        std::string q = "\"";
-        for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-        return q + "\"";
-    };
     auto full = [](double v) { return std::isnan(v) ? std::string() : fmt::format("{:.17g}", v); };
-    std::string out;
-    for (std::size_t i = 0; i < columns.size(); ++i) out += (i ? "," : "") + columns[i];
-    out += "\n";
+    Table table("results per problem and optimiser", std::vector<Column>(names.begin(), names.end()));
     for (std::size_t p = 0; p < info.problems.size(); ++p) {
         const auto& prob = info.problems[p];
         const auto& target = accuracy_target(prob);
         for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
             const auto& g = summaries[p][o];
             std::map<std::string, std::string> row;
-            row["problem"] = quote(prob.label);
-            row["optimizer"] = quote(info.optimizers[o].label);
+            row["problem"] = prob.label;
+            row["optimizer"] = info.optimizers[o].label;
             row["runs"] = std::to_string(g.runs);
             row["failed"] = std::to_string(g.failed);
             if (g.runs) {
@@ -356,21 +359,21 @@ std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>
                 row[n + "_std"] = full(g.parameters[j].sd);
                 if (target) row[n + "_err_pct"] = full(error_percent(g.parameters[j].mean, target, static_cast<Eigen::Index>(j)));
             }
-            for (std::size_t i = 0; i < columns.size(); ++i) out += (i ? "," : "") + row[columns[i]];
-            out += "\n";
+            std::vector<Cell> cells;
+            for (const auto& name : names) cells.emplace_back(row[name]);
+            table.add_row(std::move(cells));
         }
     }
-    return out;
+    return table;
 }
 
-std::string write_tables(const std::filesystem::path& directory, const ExperimentInfo& info,
-                         const std::vector<TrialRecord>& records) {
-    std::string markdown = markdown_report(info, records);
-    for (const auto& [name, text] : {std::pair{"table.md", markdown},
-                                     std::pair{"table.csv", csv_table(info, records)}}) {
-        replace_file(directory / name, text);
-    }
-    return markdown;
+std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records) { return csv(results_table(info, records)); }
+
+Document write_tables(const std::filesystem::path& directory, const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
+    Document document = tables_document(info, records);
+    replace_file(directory / "table.md", markdown(document));
+    replace_file(directory / "table.csv", csv(results_table(info, records)));
+    return document;
 }
 
 }  // namespace mhb

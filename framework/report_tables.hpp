@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/report_document.hpp"
 #include "framework/results_store.hpp"
 
 namespace mhb {
@@ -19,11 +20,15 @@ TrialGroups group_trials(const ExperimentInfo& info, const std::vector<TrialReco
 // The value tables and plots use for a trial: final fitness minus the known optimum when there is one.
 double final_error(const ProblemInfo& problem, const TrialRecord& record);
 
+// What table.md says: per problem the final errors and identified parameters, the Friedman ranks and
+// the anytime section.
+Document tables_document(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
+// table.csv: a row per (problem, optimiser) with every statistic at full precision.
+Table results_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 std::string markdown_report(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 std::string csv_table(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 
-// Writes table.md and table.csv into `directory`; returns the Markdown.
-std::string write_tables(const std::filesystem::path& directory, const ExperimentInfo& info,
-                  const std::vector<TrialRecord>& records);
+// Writes table.md and table.csv into `directory`; returns what table.md says.
+Document write_tables(const std::filesystem::path& directory, const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 
 }  // namespace mhb

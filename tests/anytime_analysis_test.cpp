@@ -133,7 +133,7 @@ dimension = 2
     const auto info = run_into(dir.path() / "out", spec);
     REQUIRE(info.anytime == spec.anytime);
     const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
-    const std::string md = anytime_markdown(info, records);
+    const std::string md = markdown(anytime_section(info, records));
     for (const std::string optimizer : {"random_search(batch=10)", "cmaes"}) {
         double used = 0;
         int successes = 0;
@@ -186,7 +186,7 @@ shift = [0.5, 1.0]
     const auto info = run_into(dir.path() / "out", spec);
     CHECK_FALSE(info.per_problem);
     const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
-    const std::string md = write_tables(dir.path() / "out", info, records);
+    const std::string md = markdown(write_tables(dir.path() / "out", info, records));
     CHECK(md.find("## test_sphere") == std::string::npos);
     CHECK(md.find("table.csv has a row for each of the 4 problems") != std::string::npos);
     CHECK(md.find("### ERT, dimension 2") != std::string::npos);

@@ -19,6 +19,16 @@
 #include "tests/temporary_directory.hpp"
 
 using namespace mhb;
+
+namespace {
+
+Table table_of(std::vector<Column> columns, const std::vector<std::vector<Cell>>& rows) {
+    Table table("test table", std::move(columns));
+    for (const auto& row : rows) table.add_row(row);
+    return table;
+}
+
+}  // namespace
 namespace fs = std::filesystem;
 
 namespace {
@@ -149,7 +159,7 @@ TEST_CASE("a page escapes user text wherever it goes and runs only its own scrip
     page.add_paragraph(hostile);
     page.add_list({hostile});
     page.add_preformatted(hostile);
-    page.add_table({{"label", hostile}, {{hostile, "1"}}});
+    page.add_table(table_of({"label", hostile}, {{hostile, "1"}}));
     page.add_details(hostile, hostile);
     const std::string html = page.html();
     CHECK(html.find("alert('x')") == std::string::npos);
@@ -169,14 +179,14 @@ TEST_CASE("a page's inline markup: `code` and **bold**, and a lone marker stays 
 
 TEST_CASE("table cells that hold numbers carry their sort key and missing values an empty one", "[html_report]") {
     HtmlReport page;
-    page.add_table({{"optimizer", "mean", "runs", "A12", "note"},
-                    {{"gwo", "1.5e-05", "10 (2 failed)", "0.50 (large)", "2opt"},
-                     {"soa", "–", "3", "—", "-"},
-                     {"de", "inf", "", "-inf", "12 %"},
-                     {"short row"}}});
+    page.add_table(table_of({"optimizer", Column("mean", "s"), "runs", "A12", "note"},
+                            {{"gwo", "1.5e-05", "10 (2 failed)", "0.50 (large)", "2opt"},
+                             {"soa", "–", "3", "—", "-"},
+                             {"de", "inf", "", "-inf", "12 %"},
+                             {"blank", Cell::none(), Cell::none(), "", Cell::none()}}));
     const std::string html = page.html();
     CHECK(page.table_count() == 1);
-    CHECK(html.find("<th scope=\"col\">optimizer</th><th scope=\"col\">mean</th>") != std::string::npos);
+    CHECK(html.find("<th scope=\"col\">optimizer</th><th scope=\"col\">mean (s)</th>") != std::string::npos);
     CHECK(html.find("<td>gwo</td>") != std::string::npos);
     CHECK(html.find("<td class=\"number\" data-sort=\"1.5e-05\">1.5e-05</td>") != std::string::npos);
     CHECK(html.find("<td class=\"number\" data-sort=\"10\">10 (2 failed)</td>") != std::string::npos);
@@ -187,8 +197,8 @@ TEST_CASE("table cells that hold numbers carry their sort key and missing values
     CHECK(html.find("<td class=\"number\" data-sort=\"Infinity\">inf</td>") != std::string::npos);
     CHECK(html.find("<td class=\"number\" data-sort=\"-Infinity\">-inf</td>") != std::string::npos);
     CHECK(html.find("<td class=\"number\" data-sort=\"12\">12 %</td>") != std::string::npos);
-    // The short row is padded to the header's five columns.
-    CHECK(html.find("<tr><td>short row</td><td class=\"number\" data-sort=\"\"></td><td class=\"number\" data-sort=\"\"></td>"
+    // Blank slots and empty text are both missing values.
+    CHECK(html.find("<tr><td>blank</td><td class=\"number\" data-sort=\"\"></td><td class=\"number\" data-sort=\"\"></td>"
                     "<td class=\"number\" data-sort=\"\"></td><td class=\"number\" data-sort=\"\"></td></tr>") != std::string::npos);
 }
 
@@ -246,36 +256,48 @@ TEST_CASE("inline_svg and add_plot refuse what they cannot show, naming the file
     CHECK_THROWS_WITH(page.add_plot("/nonexistent/plot.svg", "gone"), Contains("/nonexistent/plot.svg"));
 }
 
-TEST_CASE("add_markdown reads the Markdown the reports are written in", "[html_report]") {
+TEST_CASE("add_document shows each block of a report", "[html_report]") {
     mhb::testing::TemporaryDirectory dir;
     dir.write("bars.svg", "<svg viewBox=\"0 0 300 200\"><rect width=\"10\" height=\"20\"/></svg>");
-    const std::string markdown =
-        "# Diagnosis of `base`\n\n"
-        "Intro over\ntwo lines.\n\n"
-        "## What it says\n\n"
-        "- first finding\n- second **finding**\n\n"
-        "| segment | rms (mV) |\n|---|---|\n| a\\|b | 1.5 |\n| c | – |\n\n"
-        "![residual per segment](bars.png)\n\n"
-        "Next step:\n\n    mhbench fit --data d.csv\n    mhbench diagnose --data d.csv\n\n"
-        "### Detail\n\n#not-a-heading stays text\n";
+    Document doc;
+    doc.add(Heading{1, "Diagnosis of `base`"});
+    doc.add(Paragraph{"Intro over\ntwo lines."});
+    doc.add(Heading{2, "What it says"});
+    doc.add(BulletList{{"first finding", "second **finding**"}});
+    Table table("segments", {"segment", Column("rms", "mV")});
+    table.add_row({"a|b", "1.5"});
+    table.add_row({"c", "–"});
+    table.add_note("Noise **floor** 0.2 mV.");
+    doc.add(std::move(table));
+    doc.add(Image{"bars.png", "residual per segment"});
+    doc.add(Paragraph{"Next step:"});
+    doc.add(Preformatted{"mhbench fit --data d.csv\nmhbench diagnose --data d.csv"});
+    doc.add(Heading{3, "Detail"});
+    doc.add(Paragraph{"#not-a-heading stays text"});
+    doc.add(BulletList{});
     HtmlReport page;
-    page.add_markdown(markdown, dir.path());
+    page.add_document(doc, dir.path());
     const std::string html = page.html();
     CHECK(html.find("<title>Diagnosis of `base`</title>") != std::string::npos);
     CHECK(html.find("<h1>Diagnosis of <code>base</code></h1>") != std::string::npos);
     CHECK(html.find("<p>Intro over two lines.</p>") != std::string::npos);
     CHECK(html.find("<h2 id=\"section-1\">What it says</h2>") != std::string::npos);
     CHECK(html.find("<li>second <strong>finding</strong></li>") != std::string::npos);
+    CHECK(html.find("<th scope=\"col\">segment</th><th scope=\"col\">rms (mV)</th>") != std::string::npos);
     CHECK(html.find("<td>a|b</td><td class=\"number\" data-sort=\"1.5\">1.5</td>") != std::string::npos);
+    CHECK(html.find("</table></div>\n<p>Noise <strong>floor</strong> 0.2 mV.</p>") != std::string::npos);
     CHECK(page.table_count() == 1);
     CHECK(page.plot_count() == 1);
     CHECK(html.find("<figcaption>residual per segment</figcaption>") != std::string::npos);
     CHECK(html.find("<pre>mhbench fit --data d.csv\nmhbench diagnose --data d.csv</pre>") != std::string::npos);
     CHECK(html.find("<h3 id=\"section-2\">Detail</h3>") != std::string::npos);
     CHECK(html.find("<p>#not-a-heading stays text</p>") != std::string::npos);
+    CHECK(occurrences(html, "<ul>") == 1);  // the empty list shows nothing
     // An image whose SVG is missing is an error naming it, not a silently missing plot.
+    Document gone;
+    gone.add(Image{"gone.png", "gone"});
     HtmlReport broken;
-    CHECK_THROWS_WITH(broken.add_markdown("![gone](gone.png)\n", dir.path()), Catch::Matchers::Contains("gone.svg"));
+    CHECK_THROWS_WITH(broken.add_document(gone, dir.path()), Catch::Matchers::Contains("gone.svg"));
 }
 
 TEST_CASE("mhbench run writes report.html that renders in headless Chromium with its tables and plots", "[html_report][cli][browser]") {
@@ -358,7 +380,7 @@ TEST_CASE("a click on a header sorts numbers as numbers with missing values last
     require_chromium();
     mhb::testing::TemporaryDirectory dir;
     HtmlReport page("sorting");
-    page.add_table({{"optimizer", "error"}, {{"b", "10"}, {"a", "9"}, {"d", "–"}, {"c", "1e-3"}, {"B", "-inf"}}});
+    page.add_table(table_of({"optimizer", "error"}, {{"b", "10"}, {"a", "9"}, {"d", "–"}, {"c", "1e-3"}, {"B", "-inf"}}));
     // The test clicks as a reader would, then writes the row order where --dump-dom shows it.
     const std::string clicks = R"(<script>
 var table = document.querySelector('table'), out = [];
@@ -376,11 +398,4 @@ document.body.setAttribute('data-orders', out.join(' '));
     const std::string dom = rendered_dom(file, dir.path());
     CHECK(dom.find("data-orders=\"B,c,a,b,d b,a,c,B,d a,b,B,c,d\"") != std::string::npos);
     CHECK(dom.find("aria-sort=\"ascending\"") != std::string::npos);
-}
-
-TEST_CASE("markdown_table_cell keeps a label in its cell, and add_markdown reads it back whole", "[html_report]") {
-    CHECK(markdown_table_cell("a|b\nc\r\nd") == "a\\|b c  d");
-    HtmlReport page;
-    page.add_markdown("| label | x |\n|---|---|\n| " + markdown_table_cell("rs|de") + " | 1 |\n", ".");
-    CHECK(page.html().find("<td>rs|de</td><td class=\"number\" data-sort=\"1\">1</td></tr>") != std::string::npos);
 }

@@ -24,12 +24,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Tables, plots and report.html from whatever the directory holds; returns the Markdown report.
-std::string publish(const fs::path& directory, bool plots, bool quiet) {
+// Tables, plots and report.html from whatever the directory holds; prints table.md unless `quiet`.
+void publish(const fs::path& directory, bool plots, bool quiet) {
     const auto info = read_experiment_info(directory);
     auto loaded = read_results(directory / "results.jsonl");
     for (const auto& note : loaded.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
-    const std::string report = write_tables(directory, info, loaded.records);
+    const Document report = write_tables(directory, info, loaded.records);
     ExperimentPlots drawn;
     if (!plots) {
         drawn.absent_because = "No plots: they were not drawn (--no-plots).";
@@ -44,12 +44,11 @@ std::string publish(const fs::path& directory, bool plots, bool quiet) {
     }
     write_experiment_report(directory, info, report, drawn);
     if (!quiet) {
-        fmt::print("{}\n", report);
+        fmt::print("{}\n", markdown(report));
         fmt::print("Wrote {}/table.md, table.csv, report.html", directory.string());
         if (!drawn.images.empty()) fmt::print(" and {} plots (PNG + SVG)", drawn.images.size());
         fmt::print(".\n");
     }
-    return report;
 }
 
 // "K/N" with 1 <= K <= N; CLI11 prefixes the option's name to the message.

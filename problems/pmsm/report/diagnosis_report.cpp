@@ -370,17 +370,20 @@ std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
 
 // ---- markdown ----
 
-std::string parameter_table(const ModelFit& fit) {
-    std::string t = "| parameter | value | 95 % interval | unit | plausible range |\n|---|---|---|---|---|\n";
+Table parameter_table(const ModelFit& fit) {
+    Table table(fit.spec.text() + ": parameters", {"parameter", "value", "95 % interval", "unit", "plausible range"});
     for (std::size_t j = 0; j < fit.names.size(); ++j) {
         const auto k = static_cast<Eigen::Index>(j);
-        t += fmt::format("| {} | {} | {} | {} | [{:g}, {:g}]{} |\n", fit.names[j], value_text(fit.values[k]), interval_text(fit, k), fit.units[j],
-                         fit.range_lower[k], fit.range_upper[k], fit.at_bound(k) ? " (at a bound)" : "");
+        table.add_row({fit.names[j], value_text(fit.values[k]), interval_text(fit, k), fit.units[j],
+                       fmt::format("[{:g}, {:g}]{}", fit.range_lower[k], fit.range_upper[k], fit.at_bound(k) ? " (at a bound)" : "")});
     }
-    return t;
+    return table;
 }
 
-std::string image(const std::string& file, const std::string& alt) { return file.empty() ? std::string() : fmt::format("![{}]({})\n\n", alt, file); }
+// A plot the report shows, when gnuplot drew it (`file` empty: it did not).
+void add_image(Document& doc, const std::string& file, const std::string& caption) {
+    if (!file.empty()) doc.add(Image{file, caption});
+}
 
 }  // namespace
 
@@ -577,183 +580,185 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     const std::string path_png = path_plot(plot, d);
 
     const auto& m = d.model;
-    std::string md = fmt::format("# Diagnosis of `{}` on `{}`\n\n", m.spec.text(), data_path);
-    md += fmt::format("{} samples in {} segments; optional columns: {}.\n\n", d.samples, d.segments.size(),
-                      d.columns.empty() ? std::string("none") : fmt::format("{}", fmt::join(d.columns, ", ")));
-    md += "## What the diagnosis says\n\n";
-    for (const auto& f : d.findings) md += "- " + f + "\n";
-    md += "\n";
-    md += "## The search over sets of effects\n\n";
-    md += "Forward selection with backward pruning: each step adds the library effect with the strongest evidence that the design can "
-          "identify and that predicts held-out segments; plausibility is judged on the whole set, so a step may pass through values "
-          "that one effect takes alone while another is still missing (docs/effects.md, \"Several effects at once\"). dBIC of each "
-          "step against the one before, with the final noise estimate; explained: share of the excess residual of `" + m.spec.text() +
-          "` over the noise floor.\n\n";
-    md += "| step | model | rms (mV) | dBIC | explained | plausible | at the noise floor |\n|---|---|---|---|---|---|---|\n";
+    Document doc;
+    doc.add(Heading{1, fmt::format("Diagnosis of `{}` on `{}`", m.spec.text(), data_path)});
+    doc.add(Paragraph{fmt::format("{} samples in {} segments; optional columns: {}.", d.samples, d.segments.size(),
+                                  d.columns.empty() ? std::string("none") : fmt::format("{}", fmt::join(d.columns, ", ")))});
+    doc.add(Heading{2, "What the diagnosis says"});
+    doc.add(BulletList{d.findings});
+    doc.add(Heading{2, "The search over sets of effects"});
+    doc.add(Paragraph{"Forward selection with backward pruning: each step adds the library effect with the strongest evidence that the design can "
+                      "identify and that predicts held-out segments; plausibility is judged on the whole set, so a step may pass through values "
+                      "that one effect takes alone while another is still missing (docs/effects.md, \"Several effects at once\"). dBIC of each "
+                      "step against the one before, with the final noise estimate; explained: share of the excess residual of `" + m.spec.text() +
+                      "` over the noise floor."});
+    Table path("the search over sets of effects",
+               {"step", "model", Column("rms", "mV"), "dBIC", "explained", "plausible", "at the noise floor"});
     for (std::size_t k = 0; k < d.path.size(); ++k) {
         const auto& step = d.path[k];
-        md += fmt::format("| {} | `{}` | {} | {} | {:.0f} % | {} | {} |\n", step.added.empty() ? std::string("start") : step.added, step.fit.spec.text(),
-                          mv(step.fit.rms.total), k == 0 ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
-                          step.plausible ? "yes" : "no: " + step.implausible.front(), step.at_noise_floor ? "yes" : "no");
+        path.add_row({step.added.empty() ? std::string("start") : step.added, "`" + step.fit.spec.text() + "`", mv(step.fit.rms.total),
+                      k == 0 ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), fmt::format("{:.0f} %", 100.0 * step.explained),
+                      step.plausible ? "yes" : "no: " + step.implausible.front(), step.at_noise_floor ? "yes" : "no"});
     }
-    md += fmt::format("\n**Recommended model: `{}`**{}\n\n", d.recommended.text(),
-                      d.recommended.text() == m.spec.text() ? (d.not_in_library ? " (no set of library effects reaches the noise floor with plausible values)"
-                                                                                : " (nothing is missing)")
-                                                            : "");
-    md += image(path_png, "residual after each step of the search");
+    doc.add(std::move(path));
+    doc.add(Paragraph{fmt::format("**Recommended model: `{}`**{}", d.recommended.text(),
+                                  d.recommended.text() == m.spec.text()
+                                      ? (d.not_in_library ? " (no set of library effects reaches the noise floor with plausible values)" : " (nothing is missing)")
+                                      : "")});
+    add_image(doc, path_png, "residual after each step of the search");
     if (d.recommended.text() != m.spec.text() || !d.tie.empty()) {
         const std::string next = d.recommended.text() != m.spec.text() ? d.recommended.text() : m.spec.with(d.tie.front()).text();
-        md += fmt::format("Next step:\n\n    mhbench fit --data {}{} --model {}\n    mhbench diagnose --data {}{} --model {} --report <dir>\n\n",
-                          data_path, data_options, next, data_path, data_options, next);
+        doc.add(Paragraph{"Next step:"});
+        doc.add(Preformatted{fmt::format("mhbench fit --data {}{} --model {}\nmhbench diagnose --data {}{} --model {} --report <dir>", data_path,
+                                         data_options, next, data_path, data_options, next)});
     }
 
-    md += "## The fitted model\n\n";
-    md += fmt::format("`{}`, fitted by {}. Residual rms: u_d {} mV, u_q {} mV, combined {} mV.\n\n", m.spec.text(), m.method, mv(m.rms.d), mv(m.rms.q),
-                      mv(m.rms.total));
-    md += parameter_table(m) + "\n";
-    md += "Intervals: 95 %, from the Jacobian with AR(1)-prewhitened Newey-West covariance within segments (docs/pmsm.md, \"Uncertainty\").\n\n";
+    doc.add(Heading{2, "The fitted model"});
+    doc.add(Paragraph{fmt::format("`{}`, fitted by {}. Residual rms: u_d {} mV, u_q {} mV, combined {} mV.", m.spec.text(), m.method, mv(m.rms.d),
+                                  mv(m.rms.q), mv(m.rms.total))});
+    doc.add(parameter_table(m));
+    doc.add(Paragraph{"Intervals: 95 %, from the Jacobian with AR(1)-prewhitened Newey-West covariance within segments (docs/pmsm.md, \"Uncertainty\")."});
     if (d.steps.size() > 1) {
-        md += "Error before and after the effects:\n\n| model | u_d (mV) | u_q (mV) | combined (mV) |\n|---|---|---|---|\n";
-        for (const auto& s : d.steps) md += fmt::format("| `{}` | {} | {} | {} |\n", s.spec.text(), mv(s.rms.d), mv(s.rms.q), mv(s.rms.total));
-        md += "\n";
+        doc.add(Paragraph{"Error before and after the effects:"});
+        Table steps("error before and after the effects", {"model", Column("u_d", "mV"), Column("u_q", "mV"), Column("combined", "mV")});
+        for (const auto& s : d.steps) steps.add_row({"`" + s.spec.text() + "`", mv(s.rms.d), mv(s.rms.q), mv(s.rms.total)});
+        doc.add(std::move(steps));
     }
 
-    md += "## Where it fails\n\n";
-    md += fmt::format("Noise floor: {} mV on u_d, {} mV on u_q per sample (within-segment scatter of the best model tried, `{}`); a segment mean "
-                      "of n samples has a standard error of {} mV / sqrt(n) on u_d and {} mV / sqrt(n) on u_q (serial correlation included: "
-                      "{:.0f} effective samples of {}).\n\n",
-                      mv(d.noise.sigma[0]), mv(d.noise.sigma[1]), d.noise.model, mv(d.noise.long_run[0]), mv(d.noise.long_run[1]),
-                      d.noise.effective_samples, 2 * d.samples);
-    md += "| segment | omega_e (rad/s) | i_d (A) | i_q (A) |";
-    const bool tw = data.temp_winding.has_value(), tm = data.temp_magnet.has_value();
-    if (tw) md += " T_w (°C) |";
-    if (tm) md += " T_m (°C) |";
-    if (d.steps.size() > 1) md += " rms base (mV) |";
-    md += " rms (mV) | mean u_d ± SE (mV) | mean u_q ± SE (mV) |\n|---|---|---|---|";
-    if (tw) md += "---|";
-    if (tm) md += "---|";
-    if (d.steps.size() > 1) md += "---|";
-    md += "---|---|---|\n";
+    doc.add(Heading{2, "Where it fails"});
+    doc.add(Paragraph{fmt::format("Noise floor: {} mV on u_d, {} mV on u_q per sample (within-segment scatter of the best model tried, `{}`); a segment mean "
+                                  "of n samples has a standard error of {} mV / sqrt(n) on u_d and {} mV / sqrt(n) on u_q (serial correlation included: "
+                                  "{:.0f} effective samples of {}).",
+                                  mv(d.noise.sigma[0]), mv(d.noise.sigma[1]), d.noise.model, mv(d.noise.long_run[0]), mv(d.noise.long_run[1]),
+                                  d.noise.effective_samples, 2 * d.samples)});
+    const bool tw = data.temp_winding.has_value(), tm = data.temp_magnet.has_value(), base_shown = d.steps.size() > 1;
+    std::vector<Column> segment_columns{"segment", Column("omega_e", "rad/s"), Column("i_d", "A"), Column("i_q", "A")};
+    if (tw) segment_columns.emplace_back("T_w", "°C");
+    if (tm) segment_columns.emplace_back("T_m", "°C");
+    if (base_shown) segment_columns.emplace_back("rms base", "mV");
+    for (const char* name : {"rms", "mean u_d ± SE", "mean u_q ± SE"}) segment_columns.emplace_back(name, "mV");
+    Table segments("residual per segment", std::move(segment_columns));
     for (const auto& s : d.segments) {
-        md += fmt::format("| {} | {:.2f} | {:.4f} | {:.4f} |", markdown_table_cell(s.label), s.omega, s.i_d, s.i_q);
-        if (tw) md += fmt::format(" {:.1f} |", *s.temp_winding);
-        if (tm) md += fmt::format(" {:.1f} |", *s.temp_magnet);
-        if (d.steps.size() > 1) md += fmt::format(" {} |", mv(s.before.rms.total));
-        md += fmt::format(" {} | {} ± {} | {} ± {} |\n", mv(s.model.rms.total), mv(s.model.mean[0]), mv(s.mean_standard_error[0]), mv(s.model.mean[1]),
-                          mv(s.mean_standard_error[1]));
+        std::vector<Cell> row{s.label, fmt::format("{:.2f}", s.omega), fmt::format("{:.4f}", s.i_d), fmt::format("{:.4f}", s.i_q)};
+        if (tw) row.emplace_back(fmt::format("{:.1f}", *s.temp_winding));
+        if (tm) row.emplace_back(fmt::format("{:.1f}", *s.temp_magnet));
+        if (base_shown) row.emplace_back(mv(s.before.rms.total));
+        row.emplace_back(mv(s.model.rms.total));
+        row.emplace_back(mv(s.model.mean[0]) + " ± " + mv(s.mean_standard_error[0]));
+        row.emplace_back(mv(s.model.mean[1]) + " ± " + mv(s.mean_standard_error[1]));
+        segments.add_row(std::move(row));
     }
-    md += "\n";
+    doc.add(std::move(segments));
     const auto& l = d.lack_of_fit;
     if (l.means_available)
-        md += fmt::format("Segment means against the noise: chi-square {:.1f} on {} degrees of freedom, p = {:.2g}{}.\n\n", l.statistic, l.dof, l.p_value,
-                          l.p_value < 1e-3 ? " — the model misses something that changes between operating points" : "");
+        doc.add(Paragraph{fmt::format("Segment means against the noise: chi-square {:.1f} on {} degrees of freedom, p = {:.2g}{}.", l.statistic, l.dof,
+                                      l.p_value, l.p_value < 1e-3 ? " — the model misses something that changes between operating points" : "")});
     else
-        md += fmt::format("The segment means cannot test the model: {} equations for {} free parameters.\n\n", d.mean_equations, m.free_count());
+        doc.add(Paragraph{fmt::format("The segment means cannot test the model: {} equations for {} free parameters.", d.mean_equations, m.free_count())});
     if (!l.harmonics.empty()) {
-        md += "Harmonics of the electrical angle in the residual (amplitudes in mV; noise: standard error of one amplitude):\n\n| order | u_d | u_q | noise | p |\n|---|---|---|---|---|\n";
+        doc.add(Paragraph{"Harmonics of the electrical angle in the residual (amplitudes in mV; noise: standard error of one amplitude):"});
+        Table harmonics("harmonics of the electrical angle in the residual", {"order", "u_d", "u_q", "noise", "p"});
         for (const auto& h : l.harmonics)
-            md += fmt::format("| {} | {} | {} | {} | {:.2g} |\n", h.order, mv(h.amplitude[0]), mv(h.amplitude[1]), mv(h.standard_error), h.p_value);
-        md += "\n";
+            harmonics.add_row({std::to_string(h.order), mv(h.amplitude[0]), mv(h.amplitude[1]), mv(h.standard_error), fmt::format("{:.2g}", h.p_value)});
+        doc.add(std::move(harmonics));
     }
-    md += image(rms_png, "residual rms per segment");
-    md += image(time_png, "residual against time");
-    md += image(angle_png, "residual against the electrical angle");
-    md += image(speed_png, "segment-mean residual against speed");
-    md += image(current_png, "segment-mean residual against current");
-    md += image(temperature_png, "segment-mean residual against temperature");
+    add_image(doc, rms_png, "residual rms per segment");
+    add_image(doc, time_png, "residual against time");
+    add_image(doc, angle_png, "residual against the electrical angle");
+    add_image(doc, speed_png, "segment-mean residual against speed");
+    add_image(doc, current_png, "segment-mean residual against current");
+    add_image(doc, temperature_png, "segment-mean residual against temperature");
 
-    md += "### Parameters refitted per segment\n\n";
-    md += "Each free parameter refitted alone on one segment, all others at the global fit: the value that segment asks for (— where the "
-          "segment does not move the prediction with that parameter). A drift with temperature, current or speed names what the model lacks.\n\n";
-    md += "| segment |";
-    for (const auto& n : d.apparent_names) md += " " + n + " |";
-    md += "\n|---|";
-    for (std::size_t k = 0; k < d.apparent_names.size(); ++k) md += "---|";
-    md += "\n";
+    doc.add(Heading{3, "Parameters refitted per segment"});
+    doc.add(Paragraph{"Each free parameter refitted alone on one segment, all others at the global fit: the value that segment asks for (— where the "
+                      "segment does not move the prediction with that parameter). A drift with temperature, current or speed names what the model lacks."});
+    std::vector<Column> apparent_columns{"segment"};
+    apparent_columns.insert(apparent_columns.end(), d.apparent_names.begin(), d.apparent_names.end());
+    Table apparent("parameters refitted per segment", std::move(apparent_columns));
     for (const auto& s : d.segments) {
-        md += "| " + markdown_table_cell(s.label) + " |";
-        for (const auto& a : s.apparent) md += a.determined ? fmt::format(" {:.5g} ± {:.2g} |", a.value, a.standard_error) : std::string(" — |");
-        md += "\n";
+        std::vector<Cell> row{s.label};
+        for (const auto& a : s.apparent) row.emplace_back(a.determined ? fmt::format("{:.5g} ± {:.2g}", a.value, a.standard_error) : std::string("—"));
+        apparent.add_row(std::move(row));
     }
-    md += "\n";
-    if (d.drifts.empty()) md += "No apparent parameter varies between segments beyond its noise.\n\n";
+    doc.add(std::move(apparent));
+    if (d.drifts.empty()) doc.add(Paragraph{"No apparent parameter varies between segments beyond its noise."});
+    // Added even when empty: report.md has always had a blank line more after the sentence above.
+    BulletList drifts;
     for (const auto& x : d.drifts)
-        md += x.variable.empty()
-                  ? fmt::format("- apparent {} varies between segments beyond its noise, following none of temperature, current or speed alone.\n",
-                                x.parameter)
-                  : fmt::format("- apparent {} follows {} (r = {:.2f}, slope {:.4g} per unit of {}).\n", x.parameter, x.variable, x.correlation,
-                                x.slope, x.variable);
-    md += "\n" + image(apparent_png, "parameters refitted per segment");
+        drifts.items.push_back(x.variable.empty()
+                                   ? fmt::format("apparent {} varies between segments beyond its noise, following none of temperature, current or speed alone.",
+                                                 x.parameter)
+                                   : fmt::format("apparent {} follows {} (r = {:.2f}, slope {:.4g} per unit of {}).", x.parameter, x.variable, x.correlation,
+                                                 x.slope, x.variable));
+    doc.add(std::move(drifts));
+    add_image(doc, apparent_png, "parameters refitted per segment");
 
-    md += "## Which effect is missing\n\n";
-    md += fmt::format("Each library effect whose columns the data have was added to `{}` and fitted. Evidence: the residual after it; "
-                      "dBIC = -LR + k ln(n_eff), with LR the fall in squared residual divided by the long-run noise variance"
-                      "{} and n_eff = {:.0f} effective samples (below -10: very strong, above -2: none); LOSO, the rms error predicting "
-                      "each segment from a fit to the others, and in how many segments it beats `{}`{}; plausibility of the refitted values; "
-                      "identifiability on the design.\n\n",
-                      m.spec.text(),
-                      d.noise.dispersion > 1.0 ? fmt::format(" and by the lack of fit of the best model, {:.3g} (so structure no candidate "
-                                                             "explains does not count as evidence)",
-                                                             d.noise.dispersion)
-                                               : std::string(),
-                      d.noise.effective_samples, m.spec.text(),
-                      d.model_loso_rms ? fmt::format(" (its own LOSO: {} mV)", mv(*d.model_loso_rms)) : std::string(" (not available: fewer than 3 segments)"));
-    md += "| rank | added effect | verdict | rms after (mV) | dBIC | LOSO (mV), segments better | plausible | identifiability (unique part) |\n";
-    md += "|---|---|---|---|---|---|---|---|\n";
+    doc.add(Heading{2, "Which effect is missing"});
+    doc.add(Paragraph{fmt::format("Each library effect whose columns the data have was added to `{}` and fitted. Evidence: the residual after it; "
+                                  "dBIC = -LR + k ln(n_eff), with LR the fall in squared residual divided by the long-run noise variance"
+                                  "{} and n_eff = {:.0f} effective samples (below -10: very strong, above -2: none); LOSO, the rms error predicting "
+                                  "each segment from a fit to the others, and in how many segments it beats `{}`{}; plausibility of the refitted values; "
+                                  "identifiability on the design.",
+                                  m.spec.text(),
+                                  d.noise.dispersion > 1.0 ? fmt::format(" and by the lack of fit of the best model, {:.3g} (so structure no candidate "
+                                                                         "explains does not count as evidence)",
+                                                                         d.noise.dispersion)
+                                                           : std::string(),
+                                  d.noise.effective_samples, m.spec.text(),
+                                  d.model_loso_rms ? fmt::format(" (its own LOSO: {} mV)", mv(*d.model_loso_rms))
+                                                   : std::string(" (not available: fewer than 3 segments)"))});
+    Table candidates("candidate effects", {"rank", "added effect", "verdict", Column("rms after", "mV"), "dBIC", "LOSO (mV), segments better", "plausible",
+                                           "identifiability (unique part)"});
     for (std::size_t k = 0; k < d.candidates.size(); ++k) {
         const auto& c = d.candidates[k];
-        md += fmt::format("| {} | {} | **{}** | {} | {:.1f} | {} | {} | {} ({:.2g}) |\n", k + 1, c.effect, to_string(c.verdict), mv(c.fit.rms.total),
-                          c.delta_bic, c.loso_rms ? fmt::format("{}, {}/{}", mv(*c.loso_rms), c.loso_better, c.loso_segments) : std::string("—"),
-                          c.plausible ? "yes" : "no: " + c.implausible.front(), to_string(c.identifiability), c.unique_fraction);
+        candidates.add_row({std::to_string(k + 1), c.effect, fmt::format("**{}**", to_string(c.verdict)), mv(c.fit.rms.total), fmt::format("{:.1f}", c.delta_bic),
+                            c.loso_rms ? fmt::format("{}, {}/{}", mv(*c.loso_rms), c.loso_better, c.loso_segments) : std::string("—"),
+                            c.plausible ? "yes" : "no: " + c.implausible.front(),
+                            fmt::format("{} ({:.2g})", to_string(c.identifiability), c.unique_fraction)});
     }
-    md += "\n" + image(candidates_png, "residual with each candidate effect");
+    doc.add(std::move(candidates));
+    add_image(doc, candidates_png, "residual with each candidate effect");
     for (std::size_t k = 0; k < d.candidates.size(); ++k) {
         const auto& c = d.candidates[k];
         if (k >= 3 && c.verdict != Verdict::Supported && c.verdict != Verdict::Partial) break;
-        md += fmt::format("### {}. `{}`: {}\n\n", k + 1, m.spec.with(c.effect).text(), to_string(c.verdict));
-        md += parameter_table(c.fit) + "\n";
-        md += fmt::format("Base parameters against `{}`: Rs {}, Ld {}, Lq {}, psi_f {}.\n\n", m.spec.text(), fmt::format("{:+.2f} %", 100 * c.base_shift[0]),
-                          fmt::format("{:+.2f} %", 100 * c.base_shift[1]), fmt::format("{:+.2f} %", 100 * c.base_shift[2]),
-                          fmt::format("{:+.2f} %", 100 * c.base_shift[3]));
-        for (const auto& why : c.implausible) md += "- implausible: " + why + "\n";
-        if (!c.implausible.empty()) md += "\n";
+        doc.add(Heading{3, fmt::format("{}. `{}`: {}", k + 1, m.spec.with(c.effect).text(), to_string(c.verdict))});
+        doc.add(parameter_table(c.fit));
+        doc.add(Paragraph{fmt::format("Base parameters against `{}`: Rs {:+.2f} %, Ld {:+.2f} %, Lq {:+.2f} %, psi_f {:+.2f} %.", m.spec.text(),
+                                      100 * c.base_shift[0], 100 * c.base_shift[1], 100 * c.base_shift[2], 100 * c.base_shift[3])});
+        BulletList implausible;
+        for (const auto& why : c.implausible) implausible.items.push_back("implausible: " + why);
+        if (!implausible.items.empty()) doc.add(std::move(implausible));
     }
 
-    md += "## How sure\n\n";
-    bool said = false;
+    doc.add(Heading{2, "How sure"});
+    BulletList doubts;
     if (!d.tie.empty()) {
-        md += fmt::format("- **Near tie** between {}: the evidence cannot order them.", fmt::format("{}", fmt::join(d.tie, ", ")));
-        for (const auto& e : d.tie_experiments) md += fmt::format(" Measuring {} ({}) would separate them.", e.name, e.description);
-        md += "\n";
-        said = true;
+        std::string item = fmt::format("**Near tie** between {}: the evidence cannot order them.", fmt::format("{}", fmt::join(d.tie, ", ")));
+        for (const auto& e : d.tie_experiments) item += fmt::format(" Measuring {} ({}) would separate them.", e.name, e.description);
+        doubts.items.push_back(item);
     }
     for (const auto& c : d.candidates) {
         if (c.identifiability == Identifiability::Identifiable) continue;
-        said = true;
-        md += fmt::format("- `{}` is {} on this design: {:.2g} of its signature lies outside what `{}` can absorb.", c.effect, to_string(c.identifiability),
-                          c.unique_fraction, m.spec.text());
-        for (const auto& e : c.experiments)
-            md += fmt::format(" With {} ({}) it would be {:.2f}.", e.name, e.description, e.unique_after);
+        std::string item = fmt::format("`{}` is {} on this design: {:.2g} of its signature lies outside what `{}` can absorb.", c.effect,
+                                       to_string(c.identifiability), c.unique_fraction, m.spec.text());
+        for (const auto& e : c.experiments) item += fmt::format(" With {} ({}) it would be {:.2f}.", e.name, e.description, e.unique_after);
         for (const auto& a : c.absorption) {
-            md += fmt::format(" At a typical {} = {:.4g}: Rs {}, Ld {}, Lq {}, psi_f {} (residual change {:.2g} noise variances)", a.parameter, a.typical,
-                              fmt::format("{:+.1f} %", 100 * a.base_shift[0]), fmt::format("{:+.1f} %", 100 * a.base_shift[1]),
-                              fmt::format("{:+.1f} %", 100 * a.base_shift[2]), fmt::format("{:+.1f} %", 100 * a.base_shift[3]), a.rss_change);
-            for (const auto& [name, value] : a.impossible_from) md += fmt::format("; {} reaches zero at {} = {:.3g}", name, a.parameter, value);
-            md += ".";
+            item += fmt::format(" At a typical {} = {:.4g}: Rs {:+.1f} %, Ld {:+.1f} %, Lq {:+.1f} %, psi_f {:+.1f} % (residual change {:.2g} noise variances)",
+                                a.parameter, a.typical, 100 * a.base_shift[0], 100 * a.base_shift[1], 100 * a.base_shift[2], 100 * a.base_shift[3],
+                                a.rss_change);
+            for (const auto& [name, value] : a.impossible_from) item += fmt::format("; {} reaches zero at {} = {:.3g}", name, a.parameter, value);
+            item += ".";
         }
-        md += "\n";
+        doubts.items.push_back(item);
     }
-    for (const auto& n : d.not_tried) {
-        md += fmt::format("- `{}` was not tried: the data lack the column `{}`.\n", n.effect, n.column);
-        said = true;
-    }
-    if (!said) md += "No near ties, every candidate is identifiable on this design, and every library effect was tried.\n";
-    md += "\n";
-    md += "How these verdicts are reached: docs/effects.md, \"How diagnose decides\".\n";
-    replace_file(directory / "report.md", md);
+    for (const auto& n : d.not_tried) doubts.items.push_back(fmt::format("`{}` was not tried: the data lack the column `{}`.", n.effect, n.column));
+    if (doubts.items.empty()) doc.add(Paragraph{"No near ties, every candidate is identifiable on this design, and every library effect was tried."});
+    else doc.add(std::move(doubts));
+    doc.add(Paragraph{"How these verdicts are reached: docs/effects.md, \"How diagnose decides\"."});
+    replace_file(directory / "report.md", markdown(doc));
     outcome.markdown = directory / "report.md";
 
-    // The page shows report.md as it is, so the two cannot drift apart.
+    // The page and report.md are written from the same document, so the two cannot drift apart.
     HtmlReport page;
     // The diagnosis ran under the --threads cap (a global_control alive while it runs), if any.
     const auto threads = std::min(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
@@ -761,7 +766,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     for (const auto& [label, value] : provenance_lines(current_provenance(static_cast<int>(threads)))) page.add_provenance(label, value);
     page.add_provenance("data", data_path + data_options);
     page.add_provenance("model", m.spec.text());
-    page.add_markdown(md, directory);
+    page.add_document(doc, directory);
     if (outcome.images.empty() && !outcome.notes.empty()) page.add_paragraph("No plots: " + outcome.notes.front() + ".");
     outcome.html = directory / "report.html";
     page.write(outcome.html);
