@@ -14,6 +14,7 @@
 #include <toml++/toml.h>
 
 #include "framework/input_error.hpp"
+#include "framework/report_document.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "problems/pmsm/data/text_file.hpp"
 
@@ -436,13 +437,16 @@ std::string rate(std::size_t k, std::size_t n) {
 
 std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     const auto s = summaries(run);
-    std::string md = fmt::format("# {}\n\n{}\n\n", spec.name, spec.description);
-    md += fmt::format("Profile `{}`, model diagnosed `{}`, {} noise seeds per case, {} cases, {} drives. A drive counts as correct when the "
-                      "recommended model adds exactly the effects that were simulated (and, for an effect the library lacks, nothing while "
-                      "saying \"not in the library\"). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
-                      "true| / true of the recommended model's base parameters.\n\n",
-                      spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size());
-    md += "## Summary\n\n| cases | drives | correct | any false positive | any missed | said \"not in the library\" |\n|---|---|---|---|---|---|\n";
+    Document doc;
+    doc.add(Heading{1, spec.name});
+    doc.add(Paragraph{spec.description});
+    doc.add(Paragraph{fmt::format("Profile `{}`, model diagnosed `{}`, {} noise seeds per case, {} cases, {} drives. A drive counts as correct when the "
+                                  "recommended model adds exactly the effects that were simulated (and, for an effect the library lacks, nothing while "
+                                  "saying \"not in the library\"). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
+                                  "true| / true of the recommended model's base parameters.",
+                                  spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size())});
+    doc.add(Heading{2, "Summary"});
+    Table summary("detection per kind of case", {"cases", "drives", "correct", "any false positive", "any missed", "said \"not in the library\""});
     auto group = [&](const std::string& title, const std::function<bool(const StudyCase&)>& in) {
         std::size_t n = 0, k = 0, fp = 0, miss = 0, nil = 0;
         for (std::size_t c = 0; c < run.cases.size(); ++c) {
@@ -453,7 +457,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
             miss += s[c].any_missed;
             nil += s[c].not_in_library;
         }
-        if (n > 0) md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", title, n, rate(k, n), rate(fp, n), rate(miss, n), rate(nil, n));
+        if (n > 0) summary.add_row({title, std::to_string(n), rate(k, n), rate(fp, n), rate(miss, n), rate(nil, n)});
     };
     group("clean data", [](const StudyCase& c) { return c.kind == "clean"; });
     group("single effects, clear", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "clear"; });
@@ -461,8 +465,10 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     group("pairs, clear", [](const StudyCase& c) { return c.kind == "pair"; });
     group("triples, clear", [](const StudyCase& c) { return c.kind == "triple"; });
     group("effects outside the library", [](const StudyCase& c) { return c.kind == "outside"; });
-    md += "\n## Per case\n\n| case | kind | magnitude | correct | false positives per drive | missed | not in library | ties | median error Rs, Ld, Lq, psi_f (%) | most common wrong answer |\n";
-    md += "|---|---|---|---|---|---|---|---|---|---|\n";
+    doc.add(std::move(summary));
+    doc.add(Heading{2, "Per case"});
+    Table per_case("detection per case", {"case", "kind", "magnitude", "correct", "false positives per drive", "missed", "not in library", "ties",
+                                          Column("median error Rs, Ld, Lq, psi_f", "%"), "most common wrong answer"});
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         std::map<std::string, int> wrong;
         for (const auto& r : run.records)
@@ -475,37 +481,40 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                 common = fmt::format("`{}` ({}x)", answer, count);
             }
         const auto& x = s[c];
-        md += fmt::format("| {} | {} | {} | {} | {:.2f} | {} | {} | {} | {:.2f}, {:.2f}, {:.2f}, {:.2f} | {} |\n", run.cases[c].label, run.cases[c].kind,
-                          run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs), x.false_positives, x.any_missed,
-                          x.not_in_library, x.ties, 100 * x.median_error[0], 100 * x.median_error[1], 100 * x.median_error[2], 100 * x.median_error[3],
-                          common);
+        per_case.add_row({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs),
+                          fmt::format("{:.2f}", x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library),
+                          std::to_string(x.ties),
+                          fmt::format("{:.2f}, {:.2f}, {:.2f}, {:.2f}", 100 * x.median_error[0], 100 * x.median_error[1], 100 * x.median_error[2],
+                                      100 * x.median_error[3]),
+                          common});
     }
-    md += "\n## The settings of each effect\n\n| effect | clear | near the limit |\n|---|---|---|\n";
-    auto one_line = [](std::string text) {
-        std::string out;
-        for (char ch : text) out += ch == '\n' ? ' ' : ch;
-        return out;
-    };
+    doc.add(std::move(per_case));
+    doc.add(Heading{2, "The settings of each effect"});
+    // The cells put the settings on one line (markdown_table_cell makes line breaks blanks).
+    Table settings("the settings of each effect", {"effect", "clear", "near the limit"});
     for (const auto& e : spec.effects)
-        md += fmt::format("| {} | `{}` | {} |\n", e.name, one_line(e.clear_as_written),
-                          e.weak.empty() ? std::string("—") : "`" + one_line(e.weak_as_written) + "`");
-    for (const auto& o : spec.outside) md += fmt::format("| {} (not in the library) | `{}` | — |\n", o.name, one_line(o.settings_as_written));
-    return md;
+        settings.add_row({e.name, "`" + e.clear_as_written + "`", e.weak.empty() ? std::string("—") : "`" + e.weak_as_written + "`"});
+    for (const auto& o : spec.outside) settings.add_row({o.name + " (not in the library)", "`" + o.settings_as_written + "`", "—"});
+    doc.add(std::move(settings));
+    return markdown(doc);
 }
 
 std::string study_csv(const StudyRun& run) {
     const auto s = summaries(run);
-    std::string csv = "case,kind,magnitude,drives,correct,rate,rate_low95,rate_high95,false_positives_per_drive,any_missed,not_in_library,ties,"
-                      "median_abs_error_rs,median_abs_error_ld,median_abs_error_lq,median_abs_error_psi_f,mean_seconds\n";
+    Table table("detection per case",
+                {"case", "kind", "magnitude", "drives", "correct", "rate", "rate_low95", "rate_high95", "false_positives_per_drive", "any_missed",
+                 "not_in_library", "ties", "median_abs_error_rs", "median_abs_error_ld", "median_abs_error_lq", "median_abs_error_psi_f", "mean_seconds"});
+    auto g6 = [](double v) { return fmt::format("{:.6g}", v); };
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         const auto& x = s[c];
         const auto [lo, hi] = wilson_interval(x.correct, x.runs);
-        csv += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.4g}\n", run.cases[c].label, run.cases[c].kind,
-                           run.cases[c].magnitude, x.runs, x.correct, static_cast<double>(x.correct) / static_cast<double>(std::max<std::size_t>(x.runs, 1)),
-                           lo, hi, x.false_positives, x.any_missed, x.not_in_library, x.ties, x.median_error[0], x.median_error[1], x.median_error[2],
-                           x.median_error[3], x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)));
+        table.add_row({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude, std::to_string(x.runs), std::to_string(x.correct),
+                       g6(static_cast<double>(x.correct) / static_cast<double>(std::max<std::size_t>(x.runs, 1))), g6(lo), g6(hi),
+                       g6(x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library), std::to_string(x.ties),
+                       g6(x.median_error[0]), g6(x.median_error[1]), g6(x.median_error[2]), g6(x.median_error[3]),
+                       fmt::format("{:.4g}", x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)))});
     }
-    return csv;
+    return csv(table);
 }
 
 nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord& r) {
