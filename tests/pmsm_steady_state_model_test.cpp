@@ -13,6 +13,7 @@
 #include "framework/random.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/model/steady_state_model.hpp"
+#include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 
 using namespace mhb;

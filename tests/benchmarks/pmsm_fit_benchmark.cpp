@@ -12,6 +12,7 @@
 #include <benchmark/benchmark.h>
 
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
+#include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/temporary_directory.hpp"

@@ -84,10 +84,15 @@ struct Candidate {
     Verdict verdict = Verdict::NotSupported;
 };
 
-// One step of the search over sets of effects: the model after adding `added` to the previous step.
+// What a step of the search over sets of effects did to the set before it.
+enum class StepKind { Start, Added, Pruned };
+
+// One step of the search over sets of effects: the model after adding `effect` to the previous step,
+// or pruning it.
 struct PathStep {
     ModelFit fit;
-    std::string added;                    // empty for the first step (the model diagnosed)
+    StepKind kind = StepKind::Start;      // Start: the model diagnosed
+    std::string effect;                   // added or pruned (empty for the start)
     double delta_bic = 0.0;               // against the previous step (0 for the first)
     double explained = 0.0;               // fraction of the first step's excess residual removed so far
     bool plausible = true;                // the whole set's values (base and effects)
@@ -95,6 +100,11 @@ struct PathStep {
     bool at_noise_floor = false;          // no lack of fit left, or less than the tolerance (DiagnosisOptions)
     double structure = 0.0;               // power of the significant structure left, relative to the noise's
     std::string signature;                // of that structure, in words (empty when none is significant)
+
+    // The change as the JSON and the text write it: "+effect", "-effect", empty for the start.
+    std::string change() const {
+        return kind == StepKind::Added ? "+" + effect : kind == StepKind::Pruned ? "-" + effect : std::string();
+    }
 };
 
 struct NotTried {
@@ -149,7 +159,7 @@ struct Diagnosis {
     Eigen::Index samples = 0;
     std::vector<std::string> columns;  // optional columns present
     ModelFit model;
-    std::vector<ModelFit> steps;       // base, base+A, ... up to the model (one entry when it is base)
+    std::vector<ModelFit> build_up;    // the model's prefixes: base, base+A, ... up to the model (one entry when it is base)
     NoiseEstimate noise;
     LackOfFit lack_of_fit;             // of the model
     std::optional<LackOfFit> after_winner;
@@ -177,13 +187,8 @@ struct Diagnosis {
     std::vector<std::string> findings;   // plain statements, most important first
 };
 
-// Fits `spec` to `data` and answers where it fails, what is missing and how sure that is.
+// Fits `spec` to `data` and answers where it fails, what is missing and how sure that is: the
+// stages of diagnosis_stages.hpp in turn.
 Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const DiagnosisOptions& options);
-
-// Squared prediction error of each segment (range of rows with one label) when `spec` is refitted
-// on all the other segments, starting from `values` (its fit on all rows): the Gauss-Newton step of
-// the model linearised at `values`, exact where the prediction is linear in the free parameters.
-// Empty with fewer than three segments.
-std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values);
 
 }  // namespace mhb::pmsm

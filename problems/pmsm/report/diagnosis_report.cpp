@@ -127,8 +127,8 @@ struct PlottedResiduals {
 
 std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
     const Eigen::Index n = data.size();
-    const bool before = d.steps.size() > 1;
-    const auto& base = d.steps.front();
+    const bool before = d.build_up.size() > 1;
+    const auto& base = d.build_up.front();
     const Eigen::VectorXd& model_residual = residuals.model;
     const Eigen::VectorXd& base_residual = residuals.base;
     const fs::path file = plot.data("residual_time");
@@ -159,7 +159,7 @@ std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measuremen
 std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
     if (!data.theta_e) return {};
     const Eigen::Index n = data.size();
-    const bool before = d.steps.size() > 1;
+    const bool before = d.build_up.size() > 1;
     const fs::path samples = plot.data("residual_angle"), bins = plot.data("residual_angle_bins");
     std::ofstream out(samples);
     out << "# theta_deg r_d r_q before_r_d before_r_q\n";
@@ -227,7 +227,7 @@ fs::path write_segment_means(Plotter& plot, const Diagnosis& d) {
 
 std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& file, const std::string& name, const std::string& title,
                           const std::vector<std::pair<int, std::string>>& variables) {
-    const bool before = d.steps.size() > 1;
+    const bool before = d.build_up.size() > 1;
     // One row per variable, u_d beside u_q: two panels a row stay readable on a laptop's screen, where
     // three side by side (current: i_d, i_q, |i|) would have to shrink to two thirds.
     const auto rows = static_cast<int>(variables.size());
@@ -261,10 +261,10 @@ std::string segment_rms_bars(Plotter& plot, const Diagnosis& d) {
     body += "set style fill solid 0.85 border -1\nset boxwidth 0.9\nset grid y\nset ylabel 'rms residual (V)'\nset yrange [0:*]\n";
     body += "set xtics rotate by -35 noenhanced font ',9'\nset key top right\nset bmargin 9\n";
     std::string plots;
-    if (d.steps.size() > 1)
+    if (d.build_up.size() > 1)
         plots += fmt::format("{} using 2:xtic(1) lc rgb '{}' title 'base', ", gnuplot_quote(file.string()), before_colour);
     plots += fmt::format("{} using 3{} lc rgb '{}' title {} noenhanced, {:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {}", gnuplot_quote(file.string()),
-                         d.steps.size() > 1 ? "" : ":xtic(1)", model_colour, gnuplot_quote(d.model.spec.text()), floor,
+                         d.build_up.size() > 1 ? "" : ":xtic(1)", model_colour, gnuplot_quote(d.model.spec.text()), floor,
                          gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))));
     body += "plot " + plots + "\n";
     return plot.render("segment_rms", body, 1100, 600);
@@ -308,7 +308,7 @@ std::string path_plot(Plotter& plot, const Diagnosis& d) {
     out << "# step label rms_total rms_u_d rms_u_q plausible\n";
     for (std::size_t k = 0; k < d.path.size(); ++k) {
         const auto& step = d.path[k];
-        out << fmt::format("{} {} {:.6g} {:.6g} {:.6g} {}\n", k, gnuplot_data_string(step.added.empty() ? step.fit.spec.text() : step.added),
+        out << fmt::format("{} {} {:.6g} {:.6g} {:.6g} {}\n", k, gnuplot_data_string(step.change().empty() ? step.fit.spec.text() : step.change()),
                            step.fit.rms.total, step.fit.rms.d, step.fit.rms.q, step.plausible ? 1 : 0);
     }
     out.close();
@@ -423,7 +423,7 @@ json diagnosis_json(const Diagnosis& d) {
     json path = json::array();
     for (const auto& step : d.path)
         path.push_back({{"model", step.fit.spec.text()},
-                        {"added", step.added.empty() ? json(nullptr) : json(step.added)},
+                        {"added", step.change().empty() ? json(nullptr) : json(step.change())},
                         {"rms", step.fit.rms.total},
                         {"rms_axes", rms_json(step.fit.rms)},
                         {"dbic", step.delta_bic},
@@ -481,7 +481,7 @@ json diagnosis_json(const Diagnosis& d) {
     out["base_plausible"] = d.base_plausible;
     out["base_problems"] = d.base_problems;
     json steps = json::array();
-    for (const auto& s : d.steps) steps.push_back({{"model", s.spec.text()}, {"rms", rms_json(s.rms)}});
+    for (const auto& s : d.build_up) steps.push_back({{"model", s.spec.text()}, {"rms", rms_json(s.rms)}});
     out["steps"] = steps;
     json segments = json::array();
     for (const auto& s : d.segments) {
@@ -531,8 +531,8 @@ static std::string path_text(const Diagnosis& d) {
     std::string t = "search over sets of effects:\n";
     t += fmt::format("  {:<52} {:>10} {:>11} {:>10}  {}\n", "model", "rms (V)", "dBIC", "explained", "plausible");
     for (const auto& step : d.path)
-        t += fmt::format("  {:<52} {:>10.4g} {:>11} {:>9.0f}%  {}{}\n", (step.added.empty() ? "" : step.added + " -> ") + step.fit.spec.text(),
-                         step.fit.rms.total, step.added.empty() ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
+        t += fmt::format("  {:<52} {:>10.4g} {:>11} {:>9.0f}%  {}{}\n", (step.change().empty() ? "" : step.change() + " -> ") + step.fit.spec.text(),
+                         step.fit.rms.total, step.change().empty() ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
                          step.plausible ? "yes" : "no", step.at_noise_floor ? ", at the noise floor" : "");
     t += fmt::format("recommended model: {}\n", d.recommended.text());
     return t;
@@ -561,7 +561,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     PlottedResiduals residuals;
     Eigen::VectorXd storage;
     residuals.model = residual_of(data, d.model, storage);
-    residuals.base = residual_of(data, d.steps.front(), storage);
+    residuals.base = residual_of(data, d.build_up.front(), storage);
     const std::string time_png = residual_vs_time(plot, d, data, residuals);
     const std::string angle_png = residual_vs_angle(plot, d, data, residuals);
     const fs::path means = write_segment_means(plot, d);
@@ -596,7 +596,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
                {"step", "model", Column("rms", "mV"), "dBIC", "explained", "plausible", "at the noise floor"});
     for (std::size_t k = 0; k < d.path.size(); ++k) {
         const auto& step = d.path[k];
-        path.add_row({step.added.empty() ? std::string("start") : step.added, "`" + step.fit.spec.text() + "`", mv(step.fit.rms.total),
+        path.add_row({step.change().empty() ? std::string("start") : step.change(), "`" + step.fit.spec.text() + "`", mv(step.fit.rms.total),
                       k == 0 ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), fmt::format("{:.0f} %", 100.0 * step.explained),
                       step.plausible ? "yes" : "no: " + step.implausible.front(), step.at_noise_floor ? "yes" : "no"});
     }
@@ -618,10 +618,10 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
                                   mv(m.rms.q), mv(m.rms.total))});
     doc.add(parameter_table(m));
     doc.add(Paragraph{"Intervals: 95 %, from the Jacobian with AR(1)-prewhitened Newey-West covariance within segments (docs/pmsm.md, \"Uncertainty\")."});
-    if (d.steps.size() > 1) {
+    if (d.build_up.size() > 1) {
         doc.add(Paragraph{"Error before and after the effects:"});
         Table steps("error before and after the effects", {"model", Column("u_d", "mV"), Column("u_q", "mV"), Column("combined", "mV")});
-        for (const auto& s : d.steps) steps.add_row({"`" + s.spec.text() + "`", mv(s.rms.d), mv(s.rms.q), mv(s.rms.total)});
+        for (const auto& s : d.build_up) steps.add_row({"`" + s.spec.text() + "`", mv(s.rms.d), mv(s.rms.q), mv(s.rms.total)});
         doc.add(std::move(steps));
     }
 
@@ -631,7 +631,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
                                   "{:.0f} effective samples of {}).",
                                   mv(d.noise.sigma[0]), mv(d.noise.sigma[1]), d.noise.model, mv(d.noise.long_run[0]), mv(d.noise.long_run[1]),
                                   d.noise.effective_samples, 2 * d.samples)});
-    const bool tw = data.temp_winding.has_value(), tm = data.temp_magnet.has_value(), base_shown = d.steps.size() > 1;
+    const bool tw = data.temp_winding.has_value(), tm = data.temp_magnet.has_value(), base_shown = d.build_up.size() > 1;
     std::vector<Column> segment_columns{"segment", Column("omega_e", "rad/s"), Column("i_d", "A"), Column("i_q", "A")};
     if (tw) segment_columns.emplace_back("T_w", "°C");
     if (tm) segment_columns.emplace_back("T_m", "°C");

@@ -1,0 +1,201 @@
+#include "problems/pmsm/diagnosis/findings.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "problems/pmsm/diagnosis/verdict.hpp"
+
+namespace mhb::pmsm {
+namespace {
+
+std::string percent(double relative) { return fmt::format("{:+.1f} %", 100.0 * relative); }
+
+std::string join(const std::vector<std::string>& items) {
+    std::string out;
+    for (std::size_t k = 0; k < items.size(); ++k) out += (k == 0 ? "" : k + 1 == items.size() ? " and " : ", ") + items[k];
+    return out;
+}
+
+std::string experiment_list(const std::vector<Experiment>& experiments) {
+    std::string out;
+    for (std::size_t k = 0; k < experiments.size(); ++k)
+        out += fmt::format("{}{} ({})", k == 0 ? "" : k + 1 == experiments.size() ? " or " : ", ", experiments[k].name, experiments[k].description);
+    return out;
+}
+
+const char* unit_of(const std::string& variable) {
+    if (variable.rfind("temp", 0) == 0) return "K";
+    if (variable.find("omega") != std::string::npos) return "rad/s";
+    return "A";
+}
+
+std::string effect_values(const ModelFit& fit, Eigen::Index from) {
+    std::string values;
+    for (Eigen::Index j = from; j < fit.values.size(); ++j)
+        values += fmt::format("{}{} = {:.4g} {}", values.empty() ? "" : ", ", fit.names[static_cast<std::size_t>(j)], fit.values[j],
+                              fit.units[static_cast<std::size_t>(j)]);
+    return values;
+}
+
+bool has_column(const Diagnosis& d, const char* column) { return std::find(d.columns.begin(), d.columns.end(), column) != d.columns.end(); }
+
+const Candidate* candidate_of(const Diagnosis& d, const std::string& effect) {
+    const Candidate* found = nullptr;
+    for (const auto& c : d.candidates)
+        if (c.effect == effect) found = &c;
+    return found;
+}
+
+// The model's residual against the noise, and what the design can determine at all.
+void model_findings(const Diagnosis& d, std::vector<std::string>& f) {
+    const auto& m = d.model;
+    f.push_back(fmt::format("{} fits with a residual of {:.4g} V rms (u_d {:.4g} V, u_q {:.4g} V); the noise alone is {:.3g} V on u_d "
+                            "and {:.3g} V on u_q (measured on {}).",
+                            m.spec.text(), m.rms.total, m.rms.d, m.rms.q, d.noise.sigma[0], d.noise.sigma[1], d.noise.model));
+    if (d.build_up.size() > 1)
+        f.push_back(fmt::format("Before the effects (base model) the residual was {:.4g} V rms; with them it is {:.4g} V ({}).",
+                                d.build_up.front().rms.total, m.rms.total, percent(m.rms.total / d.build_up.front().rms.total - 1.0)));
+    const int unknowns = static_cast<int>(m.free_count());
+    if (!has_column(d, "segment"))
+        f.push_back("The data have no segment column, so the operating points are unknown: leave-one-segment-out prediction and the "
+                    "segment-mean test are not available, and identifiability is judged on the raw samples, where noise can make an effect "
+                    "look identifiable. Add a segment column (docs/data-format.md).");
+    else if (d.mean_equations <= unknowns)
+        f.push_back(fmt::format(
+            "The {} operating points give {} segment-mean equations for the {} free parameters of {}: any effect without an angle or "
+            "temperature signature is absorbed into these parameters without leaving a residual, and cannot be checked on this data.",
+            d.mean_equations / 2, d.mean_equations, unknowns, m.spec.text()));
+    for (const auto& p : d.base_problems) f.push_back("The fitted model is physically impossible: " + p + ". Something is missing or the design cannot determine it.");
+}
+
+// The effects the search added: one, or a set step by step; what structure they leave.
+void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std::string>& f) {
+    const auto& m = d.model;
+    const PathStep& last = d.path.back();
+    std::vector<std::string> added;
+    for (const auto& e : last.fit.spec.effects)
+        if (!m.spec.contains(e.name)) added.push_back(e.name);
+    const double floor = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
+    if (added.size() == 1) {
+        const Candidate* w = candidate_of(d, added.front());
+        const Candidate* next = nullptr;
+        for (const auto& c : d.candidates)
+            if (&c != w && !next) next = &c;
+        f.push_back(fmt::format("Missing effect: {} (its fit: {}). Adding it lowers the residual to {:.4g} V rms; evidence dBIC = {:.1f}{}.",
+                                added.front(), effect_values(last.fit, m.values.size()), last.fit.rms.total, w ? w->delta_bic : last.delta_bic,
+                                next ? fmt::format(", the next best ({}) {:.1f}", next->effect, next->delta_bic) : std::string()));
+    } else {
+        std::string steps;
+        for (std::size_t k = 1; k < d.path.size(); ++k)
+            steps += fmt::format("{} {} {:.4g} V (dBIC {:.1f})", k == 1 ? "" : ",", d.path[k].change(), d.path[k].fit.rms.total, d.path[k].delta_bic);
+        f.push_back(fmt::format("Missing effects: {} together (recommended model {}; their fit: {}). The residual falls from {:.4g} V rms "
+                                "step by step:{}, to the noise floor of {:.3g} V.",
+                                join(added), last.fit.spec.text(), effect_values(last.fit, m.values.size()), m.rms.total, steps, floor));
+    }
+    if (!last.signature.empty())
+        f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
+                                "the steady-state model's own error on effects that make the currents ripple; a larger one would mean "
+                                "another effect.",
+                                last.signature, last.structure, floor_tolerance));
+    if (d.winner) {
+        const Candidate* w = candidate_of(d, *d.winner);
+        if (w && w->identifiability == Identifiability::MostlyAbsorbed)
+            f.push_back(fmt::format("Only {:.0f} % of {}'s signature is its own on this design; the rest shifts the base parameters (Rs {}, Ld {}, "
+                                    "Lq {}, psi_f {} when it is added).",
+                                    100.0 * w->unique_fraction, w->effect, percent(w->base_shift[0]), percent(w->base_shift[1]),
+                                    percent(w->base_shift[2]), percent(w->base_shift[3])));
+    }
+}
+
+// The answer when the search did not end on a plausible set at the noise floor.
+void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, std::vector<std::string>& f) {
+    const PathStep& last = d.path.back();
+    if (!d.tie.empty()) {
+        const std::string after = d.path.size() > 1 ? "After " + last.fit.spec.text() + ", " : std::string();
+        f.push_back(fmt::format("{}Near tie: {} explain the {}residual about equally well (dBIC within {:g}) or cannot be told apart on this "
+                                "design; the data cannot say which is missing.",
+                                after, join(d.tie), d.path.size() > 1 ? "remaining " : "", evidence::tie_margin));
+        f.push_back(d.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
+                                              : "An experiment that would separate them: " + experiment_list(d.tie_experiments) + ".");
+    } else if (d.not_in_library) {
+        std::string text = "No set of library effects reaches the noise floor with plausible values: the missing effect is not in the library.";
+        if (d.path.size() > 1)
+            text += fmt::format(" The best set the library offers, {}, explains {:.0f} % of the excess residual{}; its effects may be real or may "
+                                "absorb part of the unknown one, so it is not recommended.",
+                                last.fit.spec.text(), 100.0 * last.explained,
+                                last.plausible ? std::string() : " but takes implausible values (" + last.implausible.front() + ")");
+        text += " The signature" + std::string(d.path.size() > 1 && remaining.significant ? " of what it leaves" : "") + ": " +
+                (remaining.significant ? remaining.signature : d.lack_of_fit.signature) + ".";
+        f.push_back(text);
+    } else if (!d.missing_effect_found) {
+        f.push_back(d.lack_of_fit.means_available || has_column(d, "theta_e")
+                        ? "No missing effect: the residual is at the noise floor and no library effect earns its parameters."
+                        : "No missing effect can be seen on this data.");
+    }
+}
+
+// What an unidentifiable candidate would need, and what it does to the base parameters meanwhile.
+std::string hidden_effect_finding(const Candidate& c) {
+    std::string text = c.effect + ": ";
+    text += c.experiments.empty() ? std::string("none of the extra operating points tried, alone or together, would make a tenth of its "
+                                                "signature its own.")
+                                  : "would show with " + experiment_list(c.experiments) + ".";
+    // The parameter that moves the base parameters most says the most about what is at stake.
+    const Absorption* largest = nullptr;
+    for (const auto& a : c.absorption)
+        if (!largest || a.base_shift.cwiseAbs().maxCoeff() > largest->base_shift.cwiseAbs().maxCoeff()) largest = &a;
+    if (largest) {
+        std::string moved;
+        for (int j = 0; j < 4; ++j)
+            if (std::abs(largest->base_shift[j]) >= 0.005)
+                moved += fmt::format("{}{} {}", moved.empty() ? "" : ", ", base_parameter_names[static_cast<std::size_t>(j)],
+                                     percent(largest->base_shift[j]));
+        text += fmt::format(" A typical {} = {:.4g} moves {} while the residual changes by {:.2g} noise variances", largest->parameter,
+                            largest->typical, moved.empty() ? std::string("the base parameters by less than 0.5 %") : moved, largest->rss_change);
+        for (const auto& [name, value] : largest->impossible_from)
+            text += fmt::format("; at {} = {:.3g} {} would reach zero", largest->parameter, value, name);
+        text += ".";
+    }
+    return text;
+}
+
+// Effects this data cannot carry: unidentifiable, or not tried for a missing column; and drifts.
+void data_findings(const Diagnosis& d, std::vector<std::string>& f) {
+    std::vector<std::string> hidden;
+    for (const auto& c : d.candidates)
+        if (c.verdict == Verdict::NotIdentifiable) hidden.push_back(c.effect);
+    if (!hidden.empty()) {
+        f.push_back(fmt::format("Not identifiable from this data (absorbed by the model's parameters without trace): {}.", join(hidden)));
+        for (const auto& c : d.candidates)
+            if (c.verdict == Verdict::NotIdentifiable) f.push_back(hidden_effect_finding(c));
+    }
+    for (const auto& n : d.not_tried)
+        f.push_back(fmt::format("{} was not tried: it needs the column {}, which the data lack (log it to check this effect).", n.effect, n.column));
+    for (const auto& drift : d.drifts)
+        if (!drift.variable.empty())
+            f.push_back(fmt::format("The apparent {} drifts with {} across segments (r = {:.2f}, {:.3g} {} per {}).", drift.parameter, drift.variable,
+                                    drift.correlation, drift.slope, d.model.units[static_cast<std::size_t>(d.model.index_of(drift.parameter))],
+                                    unit_of(drift.variable)));
+}
+
+}  // namespace
+
+std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_by_last_step, double floor_tolerance) {
+    std::vector<std::string> f;
+    model_findings(d, f);
+    if (d.missing_effect_found && d.path.size() > 1) found_findings(d, floor_tolerance, f);
+    for (const auto& c : d.candidates)
+        if (c.verdict == Verdict::Partial)
+            f.push_back(fmt::format("Alone, {} explains {:.0f} % of the excess residual (dBIC {:.1f}) but takes implausible values ({}): another effect "
+                                    "is still missing{}.",
+                                    c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(),
+                                    d.missing_effect_found ? ", and the search over sets of effects added it" : ""));
+    for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
+    unresolved_findings(d, left_by_last_step, f);
+    data_findings(d, f);
+    return f;
+}
+
+}  // namespace mhb::pmsm

@@ -1,0 +1,58 @@
+#pragma once
+// Checks of a fitted model against the data: held-out prediction, plausibility of its values, the
+// values each segment asks for and their drifts, and what an unidentifiable effect would do.
+#include <string>
+#include <vector>
+
+#include "problems/pmsm/diagnosis/diagnosis.hpp"
+
+namespace mhb::pmsm {
+
+// Squared prediction error of each segment (range of rows with one label) when `spec` is refitted
+// on all the other segments, starting from `values` (its fit on all rows): the Gauss-Newton step of
+// the model linearised at `values`, exact where the prediction is linear in the free parameters.
+// Empty with fewer than three segments.
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values);
+
+// The rms prediction error over both axes of `samples` rows from their squared errors per segment.
+double pooled_rms(const std::vector<double>& sse, Eigen::Index samples);
+
+// A candidate's held-out prediction against the model it extends.
+struct HeldOutComparison {
+    std::vector<double> folds;  // the candidate's leave_one_segment_out
+    int better = 0;             // segments it predicts better than the model does
+    // A majority of held-out segments, not the pooled error: one operating point at the edge of the
+    // range, where a polynomial extrapolates, must not outvote all the others.
+    bool predicts() const { return 2 * better >= static_cast<int>(folds.size()); }
+};
+
+// `model_folds`: the extended model's leave_one_segment_out (not empty).
+HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);
+
+// Whether `candidate` predicts held-out segments at least as well as the model it extends on a
+// majority of them (true without leave-one-out, `model_folds` empty).
+bool predicts_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);
+
+// Appends to `problems` each base parameter that is not positive or outside Table 2's box.
+void check_base(const ModelFit& fit, std::vector<std::string>& problems);
+
+// Appends to `problems` each effect parameter at an end of its plausible range (but a magnitude at 0).
+void check_effects(const ModelFit& fit, std::vector<std::string>& problems);
+
+// Each free parameter refitted alone on each segment, the others held at the global fit: the value
+// that segment asks for, appended to each segment's `apparent` (and the parameter names to `names`).
+// A drift of these with temperature, current or speed shows what is missing. `residual` is the
+// fit's (residual_of).
+void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const Eigen::VectorXd& residual, const NoiseEstimate& noise,
+                     std::vector<SegmentConditions>& segments, std::vector<std::string>& names);
+
+// Apparent parameters that vary between segments beyond the noise (four determined segments or
+// more), with the operating condition each follows most closely when |r| >= 0.8.
+std::vector<Drift> drifts_of(const std::vector<SegmentConditions>& segments, const std::vector<std::string>& names);
+
+// Each parameter of an unidentifiable candidate pinned at a typical value (the others at their
+// defaults), the model refitted around it: how far the base parameters move for no change in residual.
+std::vector<Absorption> absorption_of(const Measurement& data, const ModelSpec& spec, const ModelFit& model, const Candidate& c,
+                                      const NoiseEstimate& noise);
+
+}  // namespace mhb::pmsm

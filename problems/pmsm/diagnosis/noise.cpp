@@ -1,0 +1,68 @@
+#include "problems/pmsm/diagnosis/noise.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "problems/pmsm/diagnosis/lack_of_fit.hpp"
+#include "problems/pmsm/diagnosis/segments.hpp"
+
+namespace mhb::pmsm {
+
+// Takes its own copy of the fit's residual, or moves the one it recomputes: on a long log this
+// holds one row-sized array, not two.
+NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
+    const Eigen::Index n = data.size();
+    const auto ranges = segment_ranges(data);
+    Eigen::VectorXd storage;
+    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
+    Eigen::VectorXd within = &residual == &storage ? std::move(storage) : residual;
+    for (int a = 0; a < 2; ++a)
+        for (const auto& r : ranges) {
+            auto block = within.segment(a * n + r.first, r.rows);
+            block.array() -= block.mean();
+        }
+    // The long-run variance of each axis' mean: the regression on one indicator per axis.
+    RegressorBlocks indicators;
+    indicators.columns = 2;
+    indicators.fill = [](Eigen::Index, Eigen::Ref<Eigen::MatrixXd> rows) {
+        const Eigen::Index size = rows.rows() / 2;
+        rows.topRows(size).col(0).setOnes();
+        rows.topRows(size).col(1).setZero();
+        rows.bottomRows(size).col(0).setZero();
+        rows.bottomRows(size).col(1).setOnes();
+    };
+    RowLayout layout;
+    layout.samples = n;
+    layout.axes = 2;
+    if (data.has_segments()) layout.block = data.segment;
+    const auto u = residual_uncertainty(indicators, within, Eigen::Vector2d::Zero(), layout, CovarianceMethod::NeweyWest);
+    NoiseEstimate noise;
+    noise.model = fit.spec.text();
+    for (int a = 0; a < 2; ++a) {
+        noise.sigma[a] = std::sqrt(within.segment(a * n, n).squaredNorm() / static_cast<double>(n));
+        noise.long_run[a] = std::sqrt(std::max(u.covariance(a, a), 0.0) * static_cast<double>(n));
+        // Correlation can only cost information here; a negative one is taken as none.
+        noise.long_run[a] = std::max(noise.long_run[a], noise.sigma[a]);
+        noise.effective_samples += static_cast<double>(n) * std::pow(noise.sigma[a] / noise.long_run[a], 2);
+    }
+    return noise;
+}
+
+double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const NoiseEstimate& noise) {
+    double lr = 0.0;
+    for (int a = 0; a < 2; ++a) lr += (model.rss_axis(a) - candidate.rss_axis(a)) / (noise.long_run[a] * noise.long_run[a]);
+    return lr / noise.dispersion;
+}
+
+NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const ModelFit*>& fits) {
+    const ModelFit* best = fits.front();
+    for (const auto* f : fits)
+        if (f->rss() < best->rss()) best = f;
+    NoiseEstimate noise = estimate_noise(data, *best);
+    Eigen::VectorXd storage;
+    const LackOfFit l = lack_of_fit(data, *best, residual_of(data, *best, storage), noise);
+    if (l.means_available) noise.dispersion = std::max(1.0, l.statistic / l.dof);
+    return noise;
+}
+
+}  // namespace mhb::pmsm
