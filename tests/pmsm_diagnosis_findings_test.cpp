@@ -1,0 +1,148 @@
+// The findings alone (problems/pmsm/diagnosis/findings.hpp): the statements written for diagnoses
+// built by hand.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+
+#include "problems/pmsm/diagnosis/findings.hpp"
+
+using namespace mhb::pmsm;
+
+namespace {
+
+ModelFit fit_of(const std::string& spec, double rms, std::vector<std::pair<std::string, double>> effect_values = {}) {
+    ModelFit f;
+    f.spec = parse_model_spec(spec);
+    f.names = {"Rs", "Ld", "Lq", "psi_f"};
+    f.units = {"Ohm", "H", "H", "Vs"};
+    f.values = Eigen::Vector4d(46.0, 0.02, 0.02, 0.044);
+    for (const auto& [name, value] : effect_values) {
+        f.names.push_back(name);
+        f.units.push_back("V");
+        f.values.conservativeResize(f.values.size() + 1);
+        f.values[f.values.size() - 1] = value;
+    }
+    f.free.assign(f.names.size(), true);
+    f.rms = {rms, rms, rms};
+    return f;
+}
+
+PathStep step(ModelFit fit, StepKind kind = StepKind::Start, std::string effect = {}) {
+    PathStep s;
+    s.fit = std::move(fit);
+    s.kind = kind;
+    s.effect = std::move(effect);
+    return s;
+}
+
+// A base model on segmented data with a temperature column, nothing found yet.
+Diagnosis diagnosis_of_base() {
+    Diagnosis d;
+    d.columns = {"segment", "temp_winding"};
+    d.model = fit_of("base", 0.2);
+    d.build_up = {d.model};
+    d.noise.model = "base";
+    d.noise.sigma = {0.01, 0.02};
+    d.mean_equations = 18;
+    d.lack_of_fit.means_available = true;
+    d.path = {step(d.model)};
+    d.recommended = d.model.spec;
+    return d;
+}
+
+bool says(const std::vector<std::string>& findings, const std::string& sentence) {
+    return std::find(findings.begin(), findings.end(), sentence) != findings.end();
+}
+
+}  // namespace
+
+TEST_CASE("a model at the noise floor: its residual against the noise, and no missing effect", "[pmsm][diagnosis][findings]") {
+    const Diagnosis d = diagnosis_of_base();
+    const auto f = findings_of(d, d.lack_of_fit, 0.25);
+    REQUIRE(f.size() == 2);
+    CHECK(f[0] == "base fits with a residual of 0.2 V rms (u_d 0.2 V, u_q 0.2 V); the noise alone is 0.01 V on u_d and 0.02 V on u_q "
+                  "(measured on base).");
+    CHECK(f[1] == "No missing effect: the residual is at the noise floor and no library effect earns its parameters.");
+}
+
+TEST_CASE("data that cannot tell: no segments, too few operating points, columns missing", "[pmsm][diagnosis][findings]") {
+    Diagnosis d = diagnosis_of_base();
+    d.columns = {};
+    d.lack_of_fit.means_available = false;
+    d.not_tried = {{"rs_thermal", "temp_winding"}};
+    auto f = findings_of(d, d.lack_of_fit, 0.25);
+    CHECK_THAT(f[1], Catch::StartsWith("The data have no segment column"));
+    CHECK(says(f, "No missing effect can be seen on this data."));
+    CHECK(f.back() == "rs_thermal was not tried: it needs the column temp_winding, which the data lack (log it to check this effect).");
+    d.columns = {"segment"};
+    d.mean_equations = 4;
+    f = findings_of(d, d.lack_of_fit, 0.25);
+    CHECK_THAT(f[1], Catch::StartsWith("The 2 operating points give 4 segment-mean equations for the 4 free parameters of base:"));
+}
+
+TEST_CASE("one effect found: what it is, its values and the evidence against the next best", "[pmsm][diagnosis][findings]") {
+    Diagnosis d = diagnosis_of_base();
+    Candidate found, next;
+    found.effect = "voltage_offset";
+    found.delta_bic = -120.04;
+    found.verdict = Verdict::Supported;
+    next.effect = "deadtime";
+    next.delta_bic = -3.0;
+    next.verdict = Verdict::Weak;
+    d.candidates = {found, next};
+    d.path.push_back(step(fit_of("base+voltage_offset", 0.05, {{"voltage_offset.u_d0", 0.3}}), StepKind::Added, "voltage_offset"));
+    d.path.back().at_noise_floor = true;
+    d.missing_effect_found = true;
+    d.winner = "voltage_offset";
+    const auto f = findings_of(d, LackOfFit{}, 0.25);
+    CHECK(says(f, "Missing effect: voltage_offset (its fit: voltage_offset.u_d0 = 0.3 V). Adding it lowers the residual to 0.05 V rms; "
+                  "evidence dBIC = -120.0, the next best (deadtime) -3.0."));
+    CHECK_FALSE(says(f, "No missing effect: the residual is at the noise floor and no library effect earns its parameters."));
+}
+
+TEST_CASE("a set found step by step, with an effect pruned on the way", "[pmsm][diagnosis][findings]") {
+    Diagnosis d = diagnosis_of_base();
+    d.path.push_back(step(fit_of("base+deadtime", 0.1), StepKind::Added, "deadtime"));
+    d.path.back().delta_bic = -50.0;
+    d.path.push_back(step(fit_of("base+deadtime+encoder_offset", 0.02), StepKind::Added, "encoder_offset"));
+    d.path.back().delta_bic = -20.0;
+    d.path.back().signature = "harmonic 6 of the electrical angle";
+    d.path.back().structure = 0.1;
+    d.pruned = {"delay"};
+    d.missing_effect_found = true;
+    const auto f = findings_of(d, LackOfFit{}, 0.25);
+    const auto missing = std::find_if(f.begin(), f.end(), [](const auto& s) { return s.rfind("Missing effects: deadtime and encoder_offset together", 0) == 0; });
+    REQUIRE(missing != f.end());
+    CHECK_THAT(*missing, Catch::Contains("step by step: +deadtime 0.1 V (dBIC -50.0), +encoder_offset 0.02 V (dBIC -20.0), to the noise floor of"));
+    CHECK(says(f, "Some structure remains (harmonic 6 of the electrical angle), with 0.10 of the noise power: below the tolerance of 0.25. It is "
+                  "the size of the steady-state model's own error on effects that make the currents ripple; a larger one would mean another "
+                  "effect."));
+    CHECK(says(f, "delay was added on the way and pruned again: the other effects of the set explain it."));
+}
+
+TEST_CASE("a tie, the missing effect outside the library, a hidden effect and a drift", "[pmsm][diagnosis][findings]") {
+    Diagnosis tie = diagnosis_of_base();
+    tie.tie = {"encoder_offset", "voltage_offset"};
+    tie.tie_experiments = {{"the other direction", "omega_e = -100 rad/s", 0.5}};
+    tie.missing_effect_found = true;
+    auto f = findings_of(tie, tie.lack_of_fit, 0.25);
+    CHECK(says(f, "Near tie: encoder_offset and voltage_offset explain the residual about equally well (dBIC within 6) or cannot be told "
+                  "apart on this design; the data cannot say which is missing."));
+    CHECK(says(f, "An experiment that would separate them: the other direction (omega_e = -100 rad/s)."));
+
+    Diagnosis unknown = diagnosis_of_base();
+    unknown.lack_of_fit.significant = true;
+    unknown.lack_of_fit.signature = "segment means of the u_q residual up to 30 mV";
+    unknown.not_in_library = true;
+    Candidate hidden;
+    hidden.effect = "delay";
+    hidden.verdict = Verdict::NotIdentifiable;
+    unknown.candidates = {hidden};
+    unknown.drifts = {{"Rs", "temp_winding", 0.95, 0.18}, {"Ld", "", 0.0, 0.0}};
+    f = findings_of(unknown, unknown.lack_of_fit, 0.25);
+    CHECK(says(f, "No set of library effects reaches the noise floor with plausible values: the missing effect is not in the library. The "
+                  "signature: segment means of the u_q residual up to 30 mV."));
+    CHECK(says(f, "Not identifiable from this data (absorbed by the model's parameters without trace): delay."));
+    CHECK(says(f, "delay: none of the extra operating points tried, alone or together, would make a tenth of its signature its own."));
+    CHECK(f.back() == "The apparent Rs drifts with temp_winding across segments (r = 0.95, 0.18 Ohm per K).");
+}
