@@ -12,6 +12,7 @@
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/report/diagnosis_report.hpp"
+#include "problems/pmsm/data/settled_measurement.hpp"
 
 namespace mhb::cli {
 namespace {

@@ -11,7 +11,8 @@
 #include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
-#include "problems/pmsm/report/diagnosis_report.hpp"
+#include "problems/pmsm/report/fit_report.hpp"
+#include "problems/pmsm/data/settled_measurement.hpp"
 
 namespace mhb::cli {
 namespace {

@@ -1,8 +1,10 @@
-#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/data/settled_measurement.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
+
+#include <fmt/format.h>
 
 #include "framework/input_error.hpp"
 
@@ -84,6 +86,15 @@ std::vector<Eigen::Index> settled_rows(const Measurement& m, double settle) {
         if (t[k] - start >= settle - 1e-9) rows.push_back(k);
     }
     return rows;
+}
+
+Measurement read_settled_measurement(const std::filesystem::path& path, double settle, const ColumnMap& map) {
+    Measurement all = read_measurement(path, map);
+    const auto rows = settled_rows(all, settle);
+    if (rows.size() < 10)
+        throw InputError(path.string(), 0, "settle",
+                         fmt::format("dropping {} s after each segment start leaves {} samples; at least 10 are needed", settle, rows.size()));
+    return select_rows(std::move(all), rows);
 }
 
 }  // namespace mhb::pmsm

@@ -1,6 +1,6 @@
 #pragma once
-// What `mhbench fit` and `mhbench diagnose` print and write: console text, JSON for programs
-// (the contract in docs/effects.md), and the diagnosis report for people: one directory with
+// What `mhbench diagnose` prints and writes: console text, JSON for programs (the contract in
+// docs/effects.md), and the diagnosis report for people: one directory with
 // report.md and PNG plots (SVG beside each, the gnuplot scripts and data in plot-data/), and the same
 // report as one self-contained page, report.html, with the plots inline.
 #include <filesystem>
@@ -13,20 +13,11 @@
 
 namespace mhb::pmsm {
 
-// Reads a measurement and drops the first `settle` seconds after each segment start; InputError when
-// fewer than 10 samples remain.
-Measurement read_settled_measurement(const std::filesystem::path& path, double settle, const ColumnMap& map = {});
-
-// {"model", "data", "samples", "method", "rms": {"u_d", "u_q", "total"}, "parameters": {name: {"value",
-// "ci95", "standard_error", "unit", "fixed", "range", "at_bound"}}, "segments": [...]}; intervals the
-// data do not determine are null.
-nlohmann::ordered_json fit_json(const ModelFit& fit);
 // fit_json of the model plus "candidates" (ranked, each with "rms_after" and "parameters"),
 // "missing_effect_found", "winner", "tie", "not_in_library", the noise, lack of fit, segments,
 // drifts, steps and findings.
 nlohmann::ordered_json diagnosis_json(const Diagnosis& diagnosis);
 
-std::string fit_text(const ModelFit& fit, const Measurement& data);
 std::string diagnosis_text(const Diagnosis& diagnosis);
 
 struct ReportOutcome {

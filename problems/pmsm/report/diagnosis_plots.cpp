@@ -1,0 +1,329 @@
+#include "problems/pmsm/report/diagnosis_plots.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "framework/plots.hpp"
+#include "problems/pmsm/report/fit_report.hpp"
+
+namespace mhb::pmsm {
+namespace fs = std::filesystem;
+namespace {
+
+class Plotter {
+public:
+    Plotter(fs::path directory, ReportOutcome& outcome) : directory_(std::move(directory)), outcome_(outcome) {
+        fs::create_directories(directory_ / "plot-data");
+    }
+    fs::path data(const std::string& name) const { return directory_ / "plot-data" / (name + ".dat"); }
+    // Renders and returns the PNG's file name (empty when gnuplot failed; the reason goes to the notes).
+    std::string render(const std::string& name, const std::string& body, int width, int height) {
+        std::string error;
+        if (render_gnuplot(directory_ / name, body, width, height, error)) {
+            outcome_.images.push_back(directory_ / (name + ".png"));
+            return name + ".png";
+        }
+        if (std::find(outcome_.notes.begin(), outcome_.notes.end(), error) == outcome_.notes.end()) outcome_.notes.push_back(error);
+        return {};
+    }
+
+private:
+    fs::path directory_;
+    ReportOutcome& outcome_;
+};
+
+const char* axis_name(int a) { return a == 0 ? "u_d" : "u_q"; }
+
+constexpr const char* model_colour = "#1b6fb5";
+constexpr const char* before_colour = "#b0b0b0";
+
+std::string segment_lines(const Diagnosis& d, const Measurement& data) {
+    std::string out;
+    for (std::size_t s = 1; s < d.segments.size(); ++s) {
+        const Eigen::Index k = d.segments[s].first;
+        const double x = data.t ? (*data.t)[k] : static_cast<double>(k);
+        out += fmt::format("set arrow from {:.9g}, graph 0 to {:.9g}, graph 1 nohead dt 3 lc rgb '#999999'\n", x, x);
+    }
+    return out;
+}
+
+// The model's and the base model's residuals (residual_of), which the two plots below share.
+struct PlottedResiduals {
+    Eigen::VectorXd model, base;
+};
+
+std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
+    const Eigen::Index n = data.size();
+    const bool before = d.build_up.size() > 1;
+    const auto& base = d.build_up.front();
+    const Eigen::VectorXd& model_residual = residuals.model;
+    const Eigen::VectorXd& base_residual = residuals.base;
+    const fs::path file = plot.data("residual_time");
+    std::ofstream out(file);
+    out << "# x r_d r_q before_r_d before_r_q (V)\n";
+    for (Eigen::Index k = 0; k < n; ++k)
+        out << fmt::format("{:.9g} {:.6g} {:.6g} {:.6g} {:.6g}\n", data.t ? (*data.t)[k] : static_cast<double>(k), model_residual[k],
+                           model_residual[n + k], base_residual[k], base_residual[n + k]);
+    out.close();
+    std::string body = fmt::format("set multiplot layout 2,1 title {} noenhanced\nset grid\nset key top right\n",
+                                   gnuplot_quote("Residual (logged minus predicted voltage) through the record; dotted lines: segment changes"));
+    body += fmt::format("set xlabel {}\n", gnuplot_quote(data.t ? "t (s)" : "sample"));
+    for (int a = 0; a < 2; ++a) {
+        body += segment_lines(d, data);
+        body += fmt::format("set ylabel {} noenhanced\n", gnuplot_quote(std::string(axis_name(a)) + " residual (V)"));
+        std::string plots;
+        if (before)
+            plots += fmt::format("{} using 1:{} with points pt 7 ps 0.25 lc rgb '{}' title {} noenhanced, ", gnuplot_quote(file.string()), 4 + a,
+                                 before_colour, gnuplot_quote(fmt::format("base: {} mV rms", mv(a == 0 ? base.rms.d : base.rms.q))));
+        plots += fmt::format("{} using 1:{} with points pt 7 ps 0.25 lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()), 2 + a,
+                             model_colour, gnuplot_quote(fmt::format("{}: {} mV rms", d.model.spec.text(), mv(a == 0 ? d.model.rms.d : d.model.rms.q))));
+        body += "plot " + plots + "\nunset arrow\n";
+    }
+    body += "unset multiplot\n";
+    return plot.render("residual_time", body, 1100, 750);
+}
+
+std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
+    if (!data.theta_e) return {};
+    const Eigen::Index n = data.size();
+    const bool before = d.build_up.size() > 1;
+    const fs::path samples = plot.data("residual_angle"), bins = plot.data("residual_angle_bins");
+    std::ofstream out(samples);
+    out << "# theta_deg r_d r_q before_r_d before_r_q\n";
+    const int count = 72;
+    Eigen::ArrayXXd sum = Eigen::ArrayXXd::Zero(count, 4);
+    Eigen::ArrayXd hits = Eigen::ArrayXd::Zero(count);
+    // Deviations from each segment's mean: the operating points' offsets would otherwise hide what
+    // repeats with the angle.
+    Eigen::VectorXd model_dev = residuals.model, base_dev = residuals.base;
+    for (const auto& s : d.segments)
+        for (int a = 0; a < 2; ++a) {
+            model_dev.segment(a * n + s.first, s.rows).array() -= s.model.mean[a];
+            base_dev.segment(a * n + s.first, s.rows).array() -= s.before.mean[a];
+        }
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double deg = wrap_angle((*data.theta_e)[k]) * 180.0 / std::numbers::pi;
+        const Eigen::Array4d r(model_dev[k], model_dev[n + k], base_dev[k], base_dev[n + k]);
+        out << fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n", deg, r[0], r[1], r[2], r[3]);
+        const int b = std::clamp(static_cast<int>((deg + 180.0) / 360.0 * count), 0, count - 1);
+        sum.row(b) += r.transpose();
+        hits[b] += 1.0;
+    }
+    out.close();
+    std::ofstream mean(bins);
+    mean << "# bin_centre_deg mean_r_d mean_r_q before_mean_r_d before_mean_r_q\n";
+    for (int b = 0; b < count; ++b) {
+        if (hits[b] == 0) continue;
+        mean << fmt::format("{:.6g}", -180.0 + (b + 0.5) * 360.0 / count);
+        for (int c = 0; c < 4; ++c) mean << fmt::format(" {:.6g}", sum(b, c) / hits[b]);
+        mean << "\n";
+    }
+    mean.close();
+    std::string body = fmt::format("set multiplot layout 2,1 title {} noenhanced\nset grid\nset key top right\nset xrange [-180:180]\nset xtics 60\n",
+                                   gnuplot_quote("Residual minus its segment mean against the electrical angle (dots: samples, line: mean in 5-degree bins)"));
+    body += "set xlabel 'electrical angle theta_e (degrees)' noenhanced\n";
+    for (int a = 0; a < 2; ++a) {
+        body += fmt::format("set ylabel {} noenhanced\n", gnuplot_quote(std::string(axis_name(a)) + " residual - segment mean (V)"));
+        std::string plots;
+        if (before)
+            plots += fmt::format("{} using 1:{} with points pt 7 ps 0.2 lc rgb '#dddddd' notitle, {} using 1:{} with lines lw 2 lc rgb '#888888' title 'base' noenhanced, ",
+                                 gnuplot_quote(samples.string()), 4 + a, gnuplot_quote(bins.string()), 4 + a);
+        plots += fmt::format("{} using 1:{} with points pt 7 ps 0.2 lc rgb '#9ec5e8' notitle, {} using 1:{} with lines lw 2 lc rgb '{}' title {} noenhanced",
+                             gnuplot_quote(samples.string()), 2 + a, gnuplot_quote(bins.string()), 2 + a, model_colour,
+                             gnuplot_quote(d.model.spec.text()));
+        body += "plot " + plots + "\n";
+    }
+    body += "unset multiplot\n";
+    return plot.render("residual_angle", body, 1100, 750);
+}
+
+// Segment-mean residuals (with +-2 standard errors of noise) against operating conditions.
+fs::path write_segment_means(Plotter& plot, const Diagnosis& d) {
+    const fs::path file = plot.data("segment_means");
+    std::ofstream out(file);
+    out << "# index omega_e i_d i_q |i| temp_winding temp_magnet mean_d se_d mean_q se_q before_d before_q label\n";
+    for (std::size_t s = 0; s < d.segments.size(); ++s) {
+        const auto& c = d.segments[s];
+        out << fmt::format("{} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {}\n", s, c.omega, c.i_d, c.i_q,
+                           std::hypot(c.i_d, c.i_q), c.temp_winding.value_or(NAN), c.temp_magnet.value_or(NAN), c.model.mean[0],
+                           c.mean_standard_error[0], c.model.mean[1], c.mean_standard_error[1], c.before.mean[0], c.before.mean[1],
+                           gnuplot_quote(c.label));
+    }
+    return file;
+}
+
+std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& file, const std::string& name, const std::string& title,
+                          const std::vector<std::pair<int, std::string>>& variables) {
+    const bool before = d.build_up.size() > 1;
+    // One row per variable, u_d beside u_q: two panels a row stay readable on a laptop's screen, where
+    // three side by side (current: i_d, i_q, |i|) would have to shrink to two thirds.
+    const auto rows = static_cast<int>(variables.size());
+    std::string body = fmt::format("set multiplot layout {},2 title {} noenhanced\nset grid\nset key top left font ',9'\nset offsets graph 0.05, graph 0.05, 0, 0\n",
+                                   rows, gnuplot_quote(title));
+    for (const auto& [column, label] : variables)
+        for (int a = 0; a < 2; ++a) {
+            body += fmt::format("set xlabel {} noenhanced\nset ylabel {} noenhanced\n", gnuplot_quote(label),
+                                gnuplot_quote(std::string("mean ") + axis_name(a) + " residual (V)"));
+            std::string plots = fmt::format("0 with lines lc rgb '#444444' notitle, ");
+            if (before)
+                plots += fmt::format("{} using {}:{} with points pt 6 ps 1.2 lc rgb '#888888' title 'base' noenhanced, ", gnuplot_quote(file.string()),
+                                     column, 12 + a);
+            plots += fmt::format("{} using {}:{}:(2*${}) with yerrorbars pt 7 ps 1.0 lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()),
+                                 column, 8 + 2 * a, 9 + 2 * a, model_colour, gnuplot_quote(d.model.spec.text() + " (+-2 SE of noise)"));
+            body += "plot " + plots + "\n";
+        }
+    body += "unset multiplot\n";
+    return plot.render(name, body, 1100, 360 * rows + 60);
+}
+
+std::string segment_rms_bars(Plotter& plot, const Diagnosis& d) {
+    const fs::path file = plot.data("segment_rms");
+    std::ofstream out(file);
+    out << "# label before_total model_total\n";
+    for (const auto& c : d.segments) out << fmt::format("{} {:.6g} {:.6g}\n", gnuplot_data_string(c.label), c.before.rms.total, c.model.rms.total);
+    out.close();
+    const double floor = std::sqrt((d.noise.sigma.squaredNorm()) / 2.0);
+    std::string body = fmt::format("set title {} noenhanced\nset style data histograms\nset style histogram clustered gap 1\n",
+                                   gnuplot_quote("Residual rms per segment (u_d and u_q combined); dashed: noise floor"));
+    body += "set style fill solid 0.85 border -1\nset boxwidth 0.9\nset grid y\nset ylabel 'rms residual (V)'\nset yrange [0:*]\n";
+    body += "set xtics rotate by -35 noenhanced font ',9'\nset key top right\nset bmargin 9\n";
+    std::string plots;
+    if (d.build_up.size() > 1)
+        plots += fmt::format("{} using 2:xtic(1) lc rgb '{}' title 'base', ", gnuplot_quote(file.string()), before_colour);
+    plots += fmt::format("{} using 3{} lc rgb '{}' title {} noenhanced, {:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {}", gnuplot_quote(file.string()),
+                         d.build_up.size() > 1 ? "" : ":xtic(1)", model_colour, gnuplot_quote(d.model.spec.text()), floor,
+                         gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))));
+    body += "plot " + plots + "\n";
+    return plot.render("segment_rms", body, 1100, 600);
+}
+
+std::string apparent_plot(Plotter& plot, const Diagnosis& d) {
+    const auto count = static_cast<int>(d.apparent_names.size());
+    if (count == 0 || d.segments.empty()) return {};
+    const fs::path file = plot.data("apparent_parameters");
+    std::ofstream out(file);
+    out << "# index label then value standard_error per parameter (NaN: not determined by that segment)\n";
+    for (std::size_t s = 0; s < d.segments.size(); ++s) {
+        out << s << " " << gnuplot_data_string(d.segments[s].label);
+        for (const auto& a : d.segments[s].apparent)
+            out << (a.determined ? fmt::format(" {:.8g} {:.8g}", a.value, a.standard_error) : std::string(" NaN NaN"));
+        out << "\n";
+    }
+    out.close();
+    const int shown = std::min(count, 8);
+    const int columns = shown <= 4 ? 2 : 3;
+    const int rows = (shown + columns - 1) / columns;
+    std::string body = fmt::format("set multiplot layout {},{} title {} noenhanced\nset grid\nset xtics rotate by -35 font ',7' noenhanced\nset offsets 0.5, 0.5, 0, 0\n",
+                                   rows, columns,
+                                   gnuplot_quote("Each parameter refitted alone per segment (others at the global fit), +-2 SE; line: global fit"));
+    for (int p = 0; p < shown; ++p) {
+        const auto j = d.model.index_of(d.apparent_names[static_cast<std::size_t>(p)]);
+        body += fmt::format("set title {} noenhanced\n", gnuplot_quote(d.apparent_names[static_cast<std::size_t>(p)] + " (" +
+                                                                        d.model.units[static_cast<std::size_t>(j)] + ")"));
+        body += fmt::format("plot {} using 1:{}:(2*${}):xtic(2) with yerrorbars pt 7 lc rgb '{}' notitle, {:.10g} with lines lc rgb '#c0392b' notitle\n",
+                            gnuplot_quote(file.string()), 3 + 2 * p, 4 + 2 * p, model_colour, d.model.values[j]);
+    }
+    body += "unset multiplot\n";
+    return plot.render("apparent_parameters", body, 1100, 330 * rows + 120);
+}
+
+// The residual after each step of the search over sets of effects, falling to the noise floor.
+std::string path_plot(Plotter& plot, const Diagnosis& d) {
+    if (d.path.size() < 2) return {};
+    const fs::path file = plot.data("path");
+    std::ofstream out(file);
+    out << "# step label rms_total rms_u_d rms_u_q plausible\n";
+    for (std::size_t k = 0; k < d.path.size(); ++k) {
+        const auto& step = d.path[k];
+        out << fmt::format("{} {} {:.6g} {:.6g} {:.6g} {}\n", k, gnuplot_data_string(step.change().empty() ? step.fit.spec.text() : step.change()),
+                           step.fit.rms.total, step.fit.rms.d, step.fit.rms.q, step.plausible ? 1 : 0);
+    }
+    out.close();
+    const double floor = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
+    // The implausible marker (and its key entry) only when some step has implausible values.
+    const bool any_implausible = std::any_of(d.path.begin(), d.path.end(), [](const PathStep& step) { return !step.plausible; });
+    std::string body = fmt::format("set title {} noenhanced\nset grid\nset ylabel 'rms residual (V)'\nset logscale y\n",
+                                   gnuplot_quote(any_implausible ? "Residual after each step of the search, down to the noise floor (open circles: implausible values)"
+                                                                 : "Residual after each step of the search, down to the noise floor"));
+    body += fmt::format("set xrange [-0.4:{}]\nset xtics rotate by -25 noenhanced\nset key top right\nset bmargin 6\n", static_cast<double>(d.path.size()) - 0.6);
+    const std::string implausible_series =
+        any_implausible ? fmt::format("{} using 1:($6 > 0 ? NaN : $3) with points pt 6 ps 2.5 lw 2 lc rgb '#c0392b' title 'implausible values', ",
+                                      gnuplot_quote(file.string()))
+                        : std::string();
+    body += fmt::format("plot {0} using 1:3:xtic(2) with linespoints lw 2 pt 7 ps 1.5 lc rgb '{1}' title 'u_d and u_q combined', "
+                        "{4}"
+                        "{0} using 1:4 with linespoints dt 3 pt 4 lc rgb '#777777' title 'u_d', "
+                        "{0} using 1:5 with linespoints dt 3 pt 8 lc rgb '#aaaaaa' title 'u_q', "
+                        "{2:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {3}\n",
+                        gnuplot_quote(file.string()), model_colour, floor, gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))),
+                        implausible_series);
+    return plot.render("path", body, 1000, 520);
+}
+
+std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
+    if (d.candidates.empty()) return {};
+    const fs::path file = plot.data("candidates");
+    std::ofstream out(file);
+    out << "# rank effect rms_after colour verdict\n";
+    auto colour = [](Verdict v) {
+        switch (v) {
+            case Verdict::Supported: return 0x2e8b57;
+            case Verdict::Partial: return 0x8fbc5a;
+            case Verdict::Weak: return 0xe6a817;
+            case Verdict::NotSupported: return 0x9e9e9e;
+            case Verdict::Implausible: return 0xc0392b;
+            case Verdict::NotIdentifiable: return 0x7d5ba6;
+        }
+        return 0;
+    };
+    for (std::size_t k = 0; k < d.candidates.size(); ++k)
+        out << fmt::format("{} {} {:.6g} {} {}\n", k, gnuplot_data_string("+" + d.candidates[k].effect), d.candidates[k].fit.rms.total,
+                           colour(d.candidates[k].verdict), gnuplot_data_string(to_string(d.candidates[k].verdict)));
+    out.close();
+    const double floor = std::sqrt((d.noise.sigma.squaredNorm()) / 2.0);
+    std::string body = fmt::format("set title {} noenhanced\nset style fill solid 0.85 border -1\nset boxwidth 0.7\nset grid y\n",
+                                   gnuplot_quote("Residual rms with each library effect added, best ranked first"));
+    body += "set ylabel 'rms residual (V)'\nset yrange [0:*]\nset xtics rotate by -30 noenhanced\nset key outside right top\nset bmargin 6\n";
+    body += fmt::format("set xrange [-0.6:{}]\n", static_cast<double>(d.candidates.size()) - 0.4);
+    std::string plots = fmt::format("{} using 1:3:4:xtic(2) with boxes lc rgb variable notitle", gnuplot_quote(file.string()));
+    for (Verdict v : {Verdict::Supported, Verdict::Partial, Verdict::Weak, Verdict::NotSupported, Verdict::Implausible, Verdict::NotIdentifiable})
+        plots += fmt::format(", NaN with boxes lc rgb '#{:06x}' title {}", colour(v), gnuplot_quote(to_string(v)));
+    plots += fmt::format(", {:.6g} with lines lw 2 lc rgb '#1b6fb5' title {} noenhanced", d.model.rms.total,
+                         gnuplot_quote(d.model.spec.text() + " alone"));
+    plots += fmt::format(", {:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title 'noise floor'", floor);
+    body += "plot " + plots + "\n";
+    return plot.render("candidates", body, 1100, 560);
+}
+
+}  // namespace
+
+DiagnosisPlots draw_diagnosis_plots(const fs::path& directory, const Measurement& data, const Diagnosis& d, ReportOutcome& outcome) {
+    DiagnosisPlots out;
+    Plotter plot(directory, outcome);
+    PlottedResiduals residuals;
+    Eigen::VectorXd storage;
+    residuals.model = residual_of(data, d.model, storage);
+    residuals.base = residual_of(data, d.build_up.front(), storage);
+    out.time = residual_vs_time(plot, d, data, residuals);
+    out.angle = residual_vs_angle(plot, d, data, residuals);
+    const fs::path means = write_segment_means(plot, d);
+    out.speed = means_against(plot, d, means, "residual_speed", "Segment-mean residual against speed", {{2, "omega_e (rad/s)"}});
+    out.current = means_against(plot, d, means, "residual_current", "Segment-mean residual against current", {{3, "i_d (A)"}, {4, "i_q (A)"}, {5, "|i| (A)"}});
+    std::vector<std::pair<int, std::string>> temperatures;
+    if (data.temp_winding) temperatures.emplace_back(6, "winding temperature (degC)");
+    if (data.temp_magnet) temperatures.emplace_back(7, "magnet temperature (degC)");
+    out.temperature = temperatures.empty() ? std::string()
+                                             : means_against(plot, d, means, "residual_temperature",
+                                                             "Segment-mean residual against temperature", temperatures);
+    out.rms = segment_rms_bars(plot, d);
+    out.apparent = apparent_plot(plot, d);
+    out.candidates = candidate_plot(plot, d);
+    out.path = path_plot(plot, d);
+    return out;
+}
+
+}  // namespace mhb::pmsm

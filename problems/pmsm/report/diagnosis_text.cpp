@@ -1,0 +1,36 @@
+#include "problems/pmsm/report/diagnosis_report.hpp"
+
+#include <fmt/format.h>
+
+namespace mhb::pmsm {
+namespace {
+
+std::string path_text(const Diagnosis& d) {
+    std::string t = "search over sets of effects:\n";
+    t += fmt::format("  {:<52} {:>10} {:>11} {:>10}  {}\n", "model", "rms (V)", "dBIC", "explained", "plausible");
+    for (const auto& step : d.path)
+        t += fmt::format("  {:<52} {:>10.4g} {:>11} {:>9.0f}%  {}{}\n", (step.change().empty() ? "" : step.change() + " -> ") + step.fit.spec.text(),
+                         step.fit.rms.total, step.change().empty() ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
+                         step.plausible ? "yes" : "no", step.at_noise_floor ? ", at the noise floor" : "");
+    t += fmt::format("recommended model: {}\n", d.recommended.text());
+    return t;
+}
+
+}  // namespace
+
+std::string diagnosis_text(const Diagnosis& d) {
+    std::string t = fmt::format("data: {} ({} samples in {} segments)\nmodel: {}: residual rms u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n\n",
+                                d.source, d.samples, d.segments.size(), d.model.spec.text(), d.model.rms.d, d.model.rms.q, d.model.rms.total);
+    t += fmt::format("{:<4} {:<16} {:<17} {:>12} {:>11} {:>12} {}\n", "rank", "added effect", "verdict", "rms after (V)", "dBIC", "LOSO (V)",
+                     "identifiability");
+    for (std::size_t k = 0; k < d.candidates.size(); ++k) {
+        const auto& c = d.candidates[k];
+        t += fmt::format("{:<4} {:<16} {:<17} {:>12.4g} {:>11.1f} {:>12} {}\n", k + 1, c.effect, to_string(c.verdict), c.fit.rms.total, c.delta_bic,
+                         c.loso_rms ? fmt::format("{:.4g}", *c.loso_rms) : std::string("—"), to_string(c.identifiability));
+    }
+    t += "\n" + path_text(d) + "\n";
+    for (const auto& f : d.findings) t += "- " + f + "\n";
+    return t;
+}
+
+}  // namespace mhb::pmsm

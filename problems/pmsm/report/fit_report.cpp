@@ -1,0 +1,84 @@
+#include "problems/pmsm/report/fit_report.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace mhb::pmsm {
+
+using json = nlohmann::ordered_json;
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json rms_json(const AxisRms& r) { return {{"u_d", r.d}, {"u_q", r.q}, {"total", r.total}}; }
+
+json parameters_json(const ModelFit& fit) {
+    json p = json::object();
+    for (std::size_t j = 0; j < fit.names.size(); ++j) {
+        const auto k = static_cast<Eigen::Index>(j);
+        json e;
+        e["value"] = fit.values[k];
+        if (fit.free[j]) {
+            e["ci95"] = std::isfinite(fit.lower[k]) ? json::array({fit.lower[k], fit.upper[k]}) : json(nullptr);
+            e["standard_error"] = finite_or_null(fit.standard_error[k]);
+        }
+        e["unit"] = fit.units[j];
+        e["fixed"] = !fit.free[j];
+        e["range"] = json::array({fit.range_lower[k], fit.range_upper[k]});
+        if (fit.free[j] && j >= 4) e["at_bound"] = fit.at_bound(k);
+        p[fit.names[j]] = e;
+    }
+    return p;
+}
+
+json segments_json(const std::vector<SegmentResidual>& segments) {
+    json out = json::array();
+    for (const auto& s : segments)
+        out.push_back({{"label", s.label}, {"rows", s.rows}, {"rms", rms_json(s.rms)}, {"mean_residual", {{"u_d", s.mean[0]}, {"u_q", s.mean[1]}}}});
+    return out;
+}
+
+std::string value_text(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : std::string("—"); }
+
+std::string interval_text(const ModelFit& fit, Eigen::Index j) {
+    if (!fit.free[static_cast<std::size_t>(j)]) return "fixed";
+    if (!std::isfinite(fit.lower[j])) return "not determined by the data";
+    return fmt::format("[{:.6g}, {:.6g}]", fit.lower[j], fit.upper[j]);
+}
+
+std::string mv(double volts) { return fmt::format("{:.2f}", 1e3 * volts); }
+
+json fit_json(const ModelFit& fit) {
+    json out;
+    out["model"] = fit.spec.text();
+    out["samples"] = fit.samples;
+    out["method"] = fit.method;
+    out["rms"] = rms_json(fit.rms);
+    out["parameters"] = parameters_json(fit);
+    out["uncertainty"] = {{"method", to_string(fit.uncertainty.method)},
+                          {"axis_rho", {{"u_d", fit.uncertainty.axis_rho.size() ? fit.uncertainty.axis_rho[0] : 0.0},
+                                        {"u_q", fit.uncertainty.axis_rho.size() > 1 ? fit.uncertainty.axis_rho[1] : 0.0}}}};
+    out["segments"] = segments_json(fit.segments);
+    return out;
+}
+
+std::string fit_text(const ModelFit& fit, const Measurement& data) {
+    std::string t = fmt::format("data: {} ({} samples{})\n", data.source, data.size(),
+                                data.has_segments() ? fmt::format(" in {} segments", data.segment_labels.size()) : std::string());
+    t += fmt::format("model: {}\nfitted by {}\n\n", fit.spec.text(), fit.method);
+    t += fmt::format("{:<28} {:>14} {:>36}  {}\n", "parameter", "value", "95 % interval", "unit");
+    for (std::size_t j = 0; j < fit.names.size(); ++j) {
+        const auto k = static_cast<Eigen::Index>(j);
+        t += fmt::format("{:<28} {:>14} {:>36}  {}{}\n", fit.names[j], value_text(fit.values[k]), interval_text(fit, k), fit.units[j],
+                         fit.at_bound(k) ? "  (at a bound of its plausible range)" : "");
+    }
+    t += fmt::format("\nresidual rms: u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n", fit.rms.d, fit.rms.q, fit.rms.total);
+    if (fit.segments.size() > 1) {
+        t += fmt::format("\n{:<28} {:>6} {:>11} {:>11} {:>11}\n", "segment", "rows", "u_d (V)", "u_q (V)", "total (V)");
+        for (const auto& s : fit.segments)
+            t += fmt::format("{:<28} {:>6} {:>11.4g} {:>11.4g} {:>11.4g}\n", s.label, s.rows, s.rms.d, s.rms.q, s.rms.total);
+    }
+    return t;
+}
+
+}  // namespace mhb::pmsm

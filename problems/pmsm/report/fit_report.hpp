@@ -1,0 +1,32 @@
+#pragma once
+// What `mhbench fit` prints and writes, and the pieces of it that the diagnosis report repeats for
+// each model it shows: console text, and JSON for programs (the contract in docs/effects.md).
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
+
+namespace mhb::pmsm {
+
+// {"model", "data", "samples", "method", "rms": {"u_d", "u_q", "total"}, "parameters": {name: {"value",
+// "ci95", "standard_error", "unit", "fixed", "range", "at_bound"}}, "segments": [...]}; intervals the
+// data do not determine are null.
+nlohmann::ordered_json fit_json(const ModelFit& fit);
+std::string fit_text(const ModelFit& fit, const Measurement& data);
+
+// The fields fit_json is made of.
+nlohmann::ordered_json finite_or_null(double v);
+nlohmann::ordered_json rms_json(const AxisRms& r);
+nlohmann::ordered_json parameters_json(const ModelFit& fit);
+nlohmann::ordered_json segments_json(const std::vector<SegmentResidual>& segments);
+
+// Numbers as fit_text and the report tables show them: a value (— when not finite), a parameter's
+// 95 % interval in words, volts as millivolts.
+std::string value_text(double v);
+std::string interval_text(const ModelFit& fit, Eigen::Index j);
+std::string mv(double volts);
+
+}  // namespace mhb::pmsm
