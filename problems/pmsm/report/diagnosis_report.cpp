@@ -42,16 +42,9 @@ void add_image(Document& doc, const std::string& file, const std::string& captio
     if (!file.empty()) doc.add(Image{file, caption});
 }
 
-}  // namespace
-
-ReportOutcome write_diagnosis_report(const fs::path& directory, const Measurement& data, const Diagnosis& d, const std::string& data_path,
-                                     const std::string& data_options) {
-    ReportOutcome outcome;
-    fs::create_directories(directory);
-    const DiagnosisPlots png = draw_diagnosis_plots(directory, data, d, outcome);
-
+// The findings, the search over sets of effects and the recommendation, with the commands to run next.
+void add_summary(Document& doc, const Diagnosis& d, const DiagnosisPlots& png, const std::string& data_path, const std::string& data_options) {
     const auto& m = d.model;
-    Document doc;
     doc.add(Heading{1, fmt::format("Diagnosis of `{}` on `{}`", m.spec.text(), data_path)});
     doc.add(Paragraph{fmt::format("{} samples in {} segments; optional columns: {}.", d.samples, d.segments.size(),
                                   d.columns.empty() ? std::string("none") : fmt::format("{}", fmt::join(d.columns, ", ")))});
@@ -83,7 +76,10 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
         doc.add(Preformatted{fmt::format("mhbench fit --data {}{} --model {}\nmhbench diagnose --data {}{} --model {} --report <dir>", data_path,
                                          data_options, next, data_path, data_options, next)});
     }
+}
 
+void add_fitted_model(Document& doc, const Diagnosis& d) {
+    const auto& m = d.model;
     doc.add(Heading{2, "The fitted model"});
     doc.add(Paragraph{fmt::format("`{}`, fitted by {}. Residual rms: u_d {} mV, u_q {} mV, combined {} mV.", m.spec.text(), m.method, mv(m.rms.d),
                                   mv(m.rms.q), mv(m.rms.total))});
@@ -95,7 +91,11 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
         for (const auto& s : d.build_up) steps.add_row({"`" + s.spec.text() + "`", mv(s.rms.d), mv(s.rms.q), mv(s.rms.total)});
         doc.add(std::move(steps));
     }
+}
 
+// The noise floor, the residual per segment and the plots against time, angle and operating conditions.
+void add_where_it_fails(Document& doc, const Diagnosis& d, const Measurement& data, const DiagnosisPlots& png) {
+    const auto& m = d.model;
     doc.add(Heading{2, "Where it fails"});
     doc.add(Paragraph{fmt::format("Noise floor: {} mV on u_d, {} mV on u_q per sample (within-segment scatter of the best model tried, `{}`); a segment mean "
                                   "of n samples has a standard error of {} mV / sqrt(n) on u_d and {} mV / sqrt(n) on u_q (serial correlation included: "
@@ -139,7 +139,10 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     add_image(doc, png.speed, "segment-mean residual against speed");
     add_image(doc, png.current, "segment-mean residual against current");
     add_image(doc, png.temperature, "segment-mean residual against temperature");
+}
 
+// Each free parameter refitted alone per segment, and the drifts of these values.
+void add_apparent_parameters(Document& doc, const Diagnosis& d, const DiagnosisPlots& png) {
     doc.add(Heading{3, "Parameters refitted per segment"});
     doc.add(Paragraph{"Each free parameter refitted alone on one segment, all others at the global fit: the value that segment asks for (— where the "
                       "segment does not move the prediction with that parameter). A drift with temperature, current or speed names what the model lacks."});
@@ -163,7 +166,10 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
                                                  x.slope, x.variable));
     doc.add(std::move(drifts));
     add_image(doc, png.apparent, "parameters refitted per segment");
+}
 
+void add_candidates(Document& doc, const Diagnosis& d, const DiagnosisPlots& png) {
+    const auto& m = d.model;
     doc.add(Heading{2, "Which effect is missing"});
     doc.add(Paragraph{fmt::format("Each library effect whose columns the data have was added to `{}` and fitted. Evidence: the residual after it; "
                                   "dBIC = -LR + k ln(n_eff), with LR the fall in squared residual divided by the long-run noise variance"
@@ -200,7 +206,11 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
         for (const auto& why : c.implausible) implausible.items.push_back("implausible: " + why);
         if (!implausible.items.empty()) doc.add(std::move(implausible));
     }
+}
 
+// Near ties, what the design cannot identify and what was not tried.
+void add_doubts(Document& doc, const Diagnosis& d) {
+    const auto& m = d.model;
     doc.add(Heading{2, "How sure"});
     BulletList doubts;
     if (!d.tie.empty()) {
@@ -226,6 +236,23 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
     if (doubts.items.empty()) doc.add(Paragraph{"No near ties, every candidate is identifiable on this design, and every library effect was tried."});
     else doc.add(std::move(doubts));
     doc.add(Paragraph{"How these verdicts are reached: docs/effects.md, \"How diagnose decides\"."});
+}
+
+}  // namespace
+
+ReportOutcome write_diagnosis_report(const fs::path& directory, const Measurement& data, const Diagnosis& d, const std::string& data_path,
+                                     const std::string& data_options) {
+    ReportOutcome outcome;
+    fs::create_directories(directory);
+    const DiagnosisPlots png = draw_diagnosis_plots(directory, data, d, outcome);
+
+    Document doc;
+    add_summary(doc, d, png, data_path, data_options);
+    add_fitted_model(doc, d);
+    add_where_it_fails(doc, d, data, png);
+    add_apparent_parameters(doc, d, png);
+    add_candidates(doc, d, png);
+    add_doubts(doc, d);
     replace_file(directory / "report.md", markdown(doc));
     outcome.markdown = directory / "report.md";
 
@@ -236,7 +263,7 @@ ReportOutcome write_diagnosis_report(const fs::path& directory, const Measuremen
                                   static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
     for (const auto& [label, value] : provenance_lines(current_provenance(static_cast<int>(threads)))) page.add_provenance(label, value);
     page.add_provenance("data", data_path + data_options);
-    page.add_provenance("model", m.spec.text());
+    page.add_provenance("model", d.model.spec.text());
     page.add_document(doc, directory);
     if (outcome.images.empty() && !outcome.notes.empty()) page.add_paragraph("No plots: " + outcome.notes.front() + ".");
     outcome.html = directory / "report.html";
