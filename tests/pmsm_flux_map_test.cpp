@@ -18,7 +18,7 @@ using namespace mhb::pmsm::testing;
 
 namespace {
 
-const std::filesystem::path map_path = std::filesystem::path(MHBENCH_SHARED_DIR) / "data" / "motulator_baldor_pmsyrm_400rpm_fluxmap.csv";
+const std::filesystem::path map_path = std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "data" / "motulator_baldor_pmsyrm_400rpm_fluxmap.csv";
 
 // The map's rows read independently of FluxMap: (i_d, i_q) -> (psi_d, psi_q).
 std::map<std::pair<double, double>, std::pair<double, double>> raw_map() {

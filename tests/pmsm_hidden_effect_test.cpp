@@ -200,7 +200,7 @@ TEST_CASE("saturation of a real machine: the measured Baldor flux map as the pla
 
     // The noise floor here is the residual of the plant's own steady-state model: R_s i + j omega psi(i)
     // with the measured map itself.
-    const auto map = FluxMap::read(std::filesystem::path(MHBENCH_SHARED_DIR) / "data" / "motulator_baldor_pmsyrm_400rpm_fluxmap.csv", 0.444);
+    const auto map = FluxMap::read(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "data" / "motulator_baldor_pmsyrm_400rpm_fluxmap.csv", 0.444);
     const Eigen::Index n = data.size();
     double sum = 0.0;
     for (Eigen::Index k = 0; k < n; ++k) {

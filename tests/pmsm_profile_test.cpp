@@ -240,7 +240,7 @@ TEST_CASE("a sidecar that is not JSON is refused with its line", "[pmsm][profile
     CHECK_FALSE(read_sidecar_truth(csv).has_value());
 }
 
-TEST_CASE("the flux-map profile drives the measured machine from the shared data", "[pmsm][profile]") {
+TEST_CASE("the flux-map profile drives the measured machine from the repository's copy of the map", "[pmsm][profile]") {
     const auto spec = read_simulation_profile(experiments / "flux_map_profile.toml");
     REQUIRE(spec.effects.size() == 1);
     CHECK(spec.effects[0]->name() == "saturation");

@@ -1,6 +1,6 @@
 # Builds the fuzzers' starting corpora in the build tree, fuzz/corpus/<format>/, from inputs the
 # repository already has: experiment configs, simulation profiles, the paper's measurement, the flux
-# map in ../shared/data (when that directory exists), model specs the docs use, and every regression
+# map in experiments/pmsm/data, model specs the docs use, and every regression
 # file. Nothing is copied into the source tree. Large files are cut to their first lines: libFuzzer
 # sizes its inputs after the largest seed, and a 130 kB seed would slow every execution for little.
 
@@ -32,7 +32,7 @@ foreach(file IN LISTS pmsm_tomls)
   endif()
 endforeach()
 file(GLOB measurement_seeds ${PROJECT_SOURCE_DIR}/experiments/pmsm/*.csv)
-file(GLOB flux_map_seeds ${PROJECT_SOURCE_DIR}/../shared/data/*fluxmap*.csv)
+file(GLOB flux_map_seeds ${PROJECT_SOURCE_DIR}/experiments/pmsm/data/*fluxmap*.csv)
 
 foreach(format experiment simulation_profile measurement flux_map model_spec)
   file(MAKE_DIRECTORY ${CMAKE_BINARY_DIR}/fuzz/corpus/${format})

@@ -107,6 +107,8 @@ public:
 
     // The map's own permanent-magnet flux, psi_d at zero current.
     double magnet_flux() const { return magnet_flux_; }
+    // The psi_f at which flux() returns the map's own values.
+    double nominal_psi_f() const { return nominal_psi_f_; }
     const std::vector<double>& i_d_grid() const { return i_d_; }
     const std::vector<double>& i_q_grid() const { return i_q_; }
 
