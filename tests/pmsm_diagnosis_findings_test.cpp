@@ -146,3 +146,49 @@ TEST_CASE("a tie, the missing effect outside the library, a hidden effect and a 
     CHECK(says(f, "delay: none of the extra operating points tried, alone or together, would make a tenth of its signature its own."));
     CHECK(f.back() == "The apparent Rs drifts with temp_winding across segments (r = 0.95, 0.18 Ohm per K).");
 }
+
+TEST_CASE("a partial candidate's sentence agrees with the recommended path", "[pmsm][diagnosis][findings]") {
+    Candidate partial;
+    partial.effect = "psi_thermal";
+    partial.verdict = Verdict::Partial;
+    partial.explained = 0.83;
+    partial.delta_bic = -400.0;
+    partial.implausible = {"psi_thermal.alpha = -0.002 1/K sits at the lower end of its plausible range [-0.002, 0]"};
+    const std::string alone = "Alone, psi_thermal explains 83 % of the excess residual (dBIC -400.0) but takes implausible values "
+                              "(psi_thermal.alpha = -0.002 1/K sits at the lower end of its plausible range [-0.002, 0]): another effect is "
+                              "still missing";
+
+    // A near tie stops the search before it adds anything: the model diagnosed stays the recommendation.
+    Diagnosis tie = diagnosis_of_base();
+    tie.candidates = {partial};
+    tie.tie = {"saturation", "deadtime"};
+    tie.missing_effect_found = true;
+    auto f = findings_of(tie, tie.lack_of_fit, 0.25);
+    CHECK(says(f, alone + "; which one, the data cannot yet say (the near tie below)."));
+    for (const auto& sentence : f) CHECK_THAT(sentence, !Catch::Contains("added it"));
+
+    // The search added another effect beside the partial one: now it may say so.
+    Diagnosis set = diagnosis_of_base();
+    set.candidates = {partial};
+    set.path.push_back(step(fit_of("base+rs_thermal", 0.1), StepKind::Added, "rs_thermal"));
+    set.path.push_back(step(fit_of("base+rs_thermal+psi_thermal", 0.02), StepKind::Added, "psi_thermal"));
+    set.path.back().at_noise_floor = true;
+    set.recommended = set.path.back().fit.spec;
+    set.missing_effect_found = true;
+    f = findings_of(set, LackOfFit{}, 0.25);
+    CHECK(says(f, alone + ", and the search over sets of effects added it."));
+
+    // The recommended set holds only the partial effect itself: the other one was not added.
+    Diagnosis alone_set = set;
+    alone_set.path.erase(alone_set.path.begin() + 1);
+    alone_set.recommended = parse_model_spec("base+psi_thermal");
+    f = findings_of(alone_set, LackOfFit{}, 0.25);
+    CHECK(says(f, alone + "."));
+
+    // Nothing found and no tie: the sentence ends there.
+    Diagnosis none = diagnosis_of_base();
+    none.candidates = {partial};
+    none.not_in_library = true;
+    f = findings_of(none, none.lack_of_fit, 0.25);
+    CHECK(says(f, alone + "."));
+}

@@ -10,6 +10,17 @@
 namespace mhb::pmsm {
 namespace {
 
+// What became of the other effect that a partial candidate says is missing. The sentence may say the
+// search added it only when the recommended model holds an effect besides this one that the model
+// diagnosed lacked: on a tie the search stops before adding anything, and the recommendation is then
+// the model itself, so "added it" would contradict the recommended path.
+std::string other_missing_effect(const Diagnosis& d, const std::string& partial) {
+    for (const auto& e : d.recommended.effects)
+        if (e.name != partial && !d.model.spec.contains(e.name)) return ", and the search over sets of effects added it";
+    if (!d.tie.empty()) return "; which one, the data cannot yet say (the near tie below)";
+    return "";
+}
+
 std::string percent(double relative) { return fmt::format("{:+.1f} %", 100.0 * relative); }
 
 std::string join(const std::vector<std::string>& items) {
@@ -190,8 +201,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
         if (c.verdict == Verdict::Partial)
             f.push_back(fmt::format("Alone, {} explains {:.0f} % of the excess residual (dBIC {:.1f}) but takes implausible values ({}): another effect "
                                     "is still missing{}.",
-                                    c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(),
-                                    d.missing_effect_found ? ", and the search over sets of effects added it" : ""));
+                                    c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(), other_missing_effect(d, c.effect)));
     for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
     unresolved_findings(d, left_by_last_step, f);
     data_findings(d, f);
