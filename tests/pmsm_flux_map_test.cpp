@@ -119,9 +119,27 @@ TEST_CASE("a malformed flux map is refused with its line", "[pmsm][flux_map]") {
     e = refusal("i_d_A,i_q_A,psi_d_Vs\n0,0,0.4\n");
     CHECK(e.field() == "psi_q_Vs");
     e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,1,0.4,0.1\n1,0,0.5,0\n");
-    CHECK(e.message().find("complete rectangular grid") != std::string::npos);
+    CHECK(e.message().find("lacks the point (i_d, i_q) = (1, 1) A") != std::string::npos);
     e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,0,0.4,0.1\n");
     CHECK(e.line() == 3);
+    // One current value on an axis: nothing to interpolate between.
+    e = refusal("i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,1,0.4,0.1\n0,2,0.4,0.2\n");
+    CHECK(e.field() == "i_d_A");
+    CHECK(e.message().find("at least two values") != std::string::npos);
+    // A flux that stays flat along its own current (psi_d at i_q = 1 A, line 5) and one that falls
+    // (psi_q at i_d = 1 A between i_q = 0 and 1 A, line 5).
+    const std::string header = "i_d_A,i_q_A,psi_d_Vs,psi_q_Vs\n0,0,0.4,0\n0,1,0.4,0.1\n1,0,0.5,0\n";
+    e = refusal(header + "1,1,0.4,0.1\n");
+    CHECK(e.line() == 5);
+    CHECK(e.field() == "psi_d_Vs");
+    CHECK(e.message().find("psi_d stays from 0.4 Wb at i_d = 0 A to 0.4 Wb at i_d = 1 A (i_q = 1 A)") != std::string::npos);
+    e = refusal(header + "1,1,0.6,-0.1\n");
+    CHECK(e.line() == 5);
+    CHECK(e.field() == "psi_q_Vs");
+    CHECK(e.message().find("psi_q falls from 0 Wb at i_q = 0 A to -0.1 Wb at i_q = 1 A (i_d = 1 A)") != std::string::npos);
+    // The same map with a rising flux is accepted.
+    std::ofstream(path) << header + "1,1,0.6,0.1\n";
+    CHECK_NOTHROW(FluxMap::read(path, 1.0));
 }
 
 TEST_CASE("the flux-map plant settles where the measured map says", "[pmsm][flux_map]") {

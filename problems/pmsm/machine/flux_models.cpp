@@ -123,9 +123,37 @@ FluxMap FluxMap::parse(const std::string& text, const std::string& file, double 
     grid_d.erase(std::unique(grid_d.begin(), grid_d.end()), grid_d.end());
     std::sort(grid_q.begin(), grid_q.end());
     grid_q.erase(std::unique(grid_q.begin(), grid_q.end()), grid_q.end());
-    if (grid_d.size() < 2 || grid_q.size() < 2 || points.size() != grid_d.size() * grid_q.size())
-        throw InputError(file, 0, "", fmt::format("the points do not form a complete rectangular grid ({} points, "
-                                                  "{} i_d values x {} i_q values)", points.size(), grid_d.size(), grid_q.size()));
+    for (const auto& [axis, grid] : {std::pair{"i_d_A", &grid_d}, std::pair{"i_q_A", &grid_q}})
+        if (grid->size() < 2)
+            throw InputError(file, 0, axis, fmt::format("a flux map needs at least two values of this current to interpolate between; "
+                                                        "it has only {} A", grid->front()));
+    for (double d : grid_d)
+        for (double q : grid_q)
+            if (!points.count({d, q}))
+                throw InputError(file, 0, "", fmt::format("the grid lacks the point (i_d, i_q) = ({}, {}) A: a flux map is a complete "
+                                                          "rectangular grid ({} points given for {} i_d x {} i_q values)",
+                                                          d, q, points.size(), grid_d.size(), grid_q.size()));
+    // Each axis' flux must rise with its own current (a positive incremental inductance): a map that
+    // falls somewhere is mislabelled or has a sign error, and the plant's Newton inversion of it would
+    // have no unique answer there.
+    auto check_rising = [&](const char* field, double psi_of(const std::pair<double, double>&), bool along_d) {
+        const auto& outer = along_d ? grid_q : grid_d;
+        const auto& inner = along_d ? grid_d : grid_q;
+        for (double o : outer)
+            for (std::size_t k = 1; k < inner.size(); ++k) {
+                const std::pair<double, double> before = along_d ? std::pair{inner[k - 1], o} : std::pair{o, inner[k - 1]};
+                const std::pair<double, double> here = along_d ? std::pair{inner[k], o} : std::pair{o, inner[k]};
+                const double a = psi_of(points.at(before)), b = psi_of(points.at(here));
+                if (!(b > a))
+                    throw InputError(file, point_line.at(here), field,
+                                     fmt::format("{} {} from {} Wb at {} = {} A to {} Wb at {} = {} A ({} = {} A): the flux of an axis "
+                                                 "must rise with its own current", along_d ? "psi_d" : "psi_q", b == a ? "stays" : "falls",
+                                                 a, along_d ? "i_d" : "i_q", inner[k - 1], b, along_d ? "i_d" : "i_q", inner[k],
+                                                 along_d ? "i_q" : "i_d", o));
+            }
+    };
+    check_rising("psi_d_Vs", [](const std::pair<double, double>& p) { return p.first; }, true);
+    check_rising("psi_q_Vs", [](const std::pair<double, double>& p) { return p.second; }, false);
     std::vector<double> psi_d, psi_q;
     for (double d : grid_d)
         for (double q : grid_q) {
