@@ -123,7 +123,14 @@ TEST_CASE("device plant, several noise seeds: clear effects found alone, in a pa
         CHECK(r.correct);
         CHECK(r.false_positives.empty());
         CHECK(r.not_in_library == c.outside);
-        // Refitted with the right set, the base parameters come back within a few per cent.
-        if (r.correct && !c.outside) CHECK(r.base_error.cwiseAbs().maxCoeff() < 0.05);
+        // Refitted with the right set, the base parameters come back within a few per cent, and the
+        // data determine an interval for each of them.
+        if (r.correct && !c.outside) {
+            CHECK(r.base_error.cwiseAbs().maxCoeff() < 0.05);
+            for (int covered : r.covered) CHECK(covered >= 0);
+        }
     }
+    const std::string table = study_markdown(spec, run);
+    CHECK_THAT(table, Catch::Contains("95 % intervals holding the truth when correct: Rs, Ld, Lq, psi_f"));
+    CHECK(study_record_json(run, run.records.front())["interval_holds_truth"].size() == 4);
 }

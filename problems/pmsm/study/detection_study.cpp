@@ -367,6 +367,15 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             if (step.fit.spec.text() == r.recommended) fit = &step.fit;
         const Eigen::Vector4d truth(sim.motor.rs, sim.motor.ld, sim.motor.lq, sim.motor.psi_f);
         r.base_error = (fit->values.head<4>() - truth).cwiseQuotient(truth);
+        // The search compares its sets without intervals; the recommended one gets them here, polished
+        // from where the search left it.
+        FitOptions with_intervals = options.fit;
+        with_intervals.intervals = true;
+        with_intervals.keep_residual = false;
+        const ModelFit interval_fit = polish_model(result.data, fit->spec, fit->values, with_intervals);
+        for (int j = 0; j < 4; ++j)
+            if (std::isfinite(interval_fit.lower[j]) && std::isfinite(interval_fit.upper[j]))
+                r.covered[static_cast<std::size_t>(j)] = interval_fit.lower[j] <= truth[j] && truth[j] <= interval_fit.upper[j] ? 1 : 0;
         r.rms = d.model.rms.total;
         r.rms_recommended = fit->rms.total;
         r.noise = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
@@ -396,7 +405,20 @@ struct CaseSummary {
     double false_positives = 0.0;
     Eigen::Vector4d median_error = Eigen::Vector4d::Zero();  // of |relative error|, over runs
     double seconds = 0.0;
+    // Over the drives whose recommended model is correct: intervals of Rs, Ld, Lq, psi_f holding the
+    // true value, and intervals there were.
+    std::array<std::size_t, 4> covered{}, intervals{};
 };
+
+// "95, 100, 90, 100 % of 20": the share of intervals that hold the truth, parameter by parameter.
+std::string coverage_text(const std::array<std::size_t, 4>& covered, const std::array<std::size_t, 4>& intervals) {
+    std::string out;
+    for (std::size_t j = 0; j < 4; ++j)
+        out += (j ? ", " : "") + (intervals[j] ? fmt::format("{:.0f}", 100.0 * static_cast<double>(covered[j]) / static_cast<double>(intervals[j]))
+                                               : std::string("—"));
+    const std::size_t most = *std::max_element(intervals.begin(), intervals.end());
+    return most ? out + fmt::format(" % of {}", most) : std::string("—");
+}
 
 double median(std::vector<double> v) {
     if (v.empty()) return std::nan("");
@@ -419,6 +441,12 @@ std::vector<CaseSummary> summaries(const StudyRun& run) {
         s.false_positives += static_cast<double>(r.false_positives.size());
         s.seconds += r.seconds;
         for (int j = 0; j < 4; ++j) errors[r.case_index][static_cast<std::size_t>(j)].push_back(std::abs(r.base_error[j]));
+        if (r.correct)
+            for (std::size_t j = 0; j < 4; ++j)
+                if (r.covered[j] >= 0) {
+                    ++s.intervals[j];
+                    s.covered[j] += static_cast<std::size_t>(r.covered[j]);
+                }
     }
     for (std::size_t c = 0; c < out.size(); ++c) {
         if (out[c].runs > 0) out[c].false_positives /= static_cast<double>(out[c].runs);
@@ -443,12 +471,16 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     doc.add(Paragraph{fmt::format("Profile `{}`, model diagnosed `{}`, {} noise seeds per case, {} cases, {} drives. A drive counts as correct when the "
                                   "recommended model adds exactly the effects that were simulated (and, for an effect the library lacks, nothing while "
                                   "saying \"not in the library\"). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
-                                  "true| / true of the recommended model's base parameters.",
+                                  "true| / true of the recommended model's base parameters. Interval coverage: over the drives whose recommended model is "
+                                  "correct, the share in which the 95 % interval of each base parameter (the recommended model polished with intervals) "
+                                  "holds the plant's value; at least 90 % is what a 95 % interval owes.",
                                   spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size())});
     doc.add(Heading{2, "Summary"});
-    Table summary("detection per kind of case", {"cases", "drives", "correct", "any false positive", "any missed", "said \"not in the library\""});
+    Table summary("detection per kind of case", {"cases", "drives", "correct", "any false positive", "any missed", "said \"not in the library\"",
+                                                 "95 % intervals holding the truth when correct: Rs, Ld, Lq, psi_f"});
     auto group = [&](const std::string& title, const std::function<bool(const StudyCase&)>& in) {
         std::size_t n = 0, k = 0, fp = 0, miss = 0, nil = 0;
+        std::array<std::size_t, 4> covered{}, intervals{};
         for (std::size_t c = 0; c < run.cases.size(); ++c) {
             if (!in(run.cases[c])) continue;
             n += s[c].runs;
@@ -456,8 +488,12 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
             fp += s[c].any_false_positive;
             miss += s[c].any_missed;
             nil += s[c].not_in_library;
+            for (std::size_t j = 0; j < 4; ++j) {
+                covered[j] += s[c].covered[j];
+                intervals[j] += s[c].intervals[j];
+            }
         }
-        if (n > 0) summary.add_row({title, std::to_string(n), rate(k, n), rate(fp, n), rate(miss, n), rate(nil, n)});
+        if (n > 0) summary.add_row({title, std::to_string(n), rate(k, n), rate(fp, n), rate(miss, n), rate(nil, n), coverage_text(covered, intervals)});
     };
     group("clean data", [](const StudyCase& c) { return c.kind == "clean"; });
     group("single effects, clear", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "clear"; });
@@ -468,7 +504,8 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     doc.add(std::move(summary));
     doc.add(Heading{2, "Per case"});
     Table per_case("detection per case", {"case", "kind", "magnitude", "correct", "false positives per drive", "missed", "not in library", "ties",
-                                          Column("median error Rs, Ld, Lq, psi_f", "%"), "most common wrong answer"});
+                                          Column("median error Rs, Ld, Lq, psi_f", "%"), "intervals holding the truth when correct",
+                                          "most common wrong answer"});
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         std::map<std::string, int> wrong;
         for (const auto& r : run.records)
@@ -486,7 +523,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                           std::to_string(x.ties),
                           fmt::format("{:.2f}, {:.2f}, {:.2f}, {:.2f}", 100 * x.median_error[0], 100 * x.median_error[1], 100 * x.median_error[2],
                                       100 * x.median_error[3]),
-                          common});
+                          coverage_text(x.covered, x.intervals), common});
     }
     doc.add(std::move(per_case));
     doc.add(Heading{2, "The settings of each effect"});
@@ -503,15 +540,21 @@ std::string study_csv(const StudyRun& run) {
     const auto s = summaries(run);
     Table table("detection per case",
                 {"case", "kind", "magnitude", "drives", "correct", "rate", "rate_low95", "rate_high95", "false_positives_per_drive", "any_missed",
-                 "not_in_library", "ties", "median_abs_error_rs", "median_abs_error_ld", "median_abs_error_lq", "median_abs_error_psi_f", "mean_seconds"});
+                 "not_in_library", "ties", "median_abs_error_rs", "median_abs_error_ld", "median_abs_error_lq", "median_abs_error_psi_f",
+                 "coverage_rs", "coverage_ld", "coverage_lq", "coverage_psi_f", "coverage_drives", "mean_seconds"});
     auto g6 = [](double v) { return fmt::format("{:.6g}", v); };
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         const auto& x = s[c];
         const auto [lo, hi] = wilson_interval(x.correct, x.runs);
+        auto coverage = [&](std::size_t j) {
+            return x.intervals[j] ? g6(static_cast<double>(x.covered[j]) / static_cast<double>(x.intervals[j])) : std::string();
+        };
         table.add_row({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude, std::to_string(x.runs), std::to_string(x.correct),
                        g6(static_cast<double>(x.correct) / static_cast<double>(std::max<std::size_t>(x.runs, 1))), g6(lo), g6(hi),
                        g6(x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library), std::to_string(x.ties),
                        g6(x.median_error[0]), g6(x.median_error[1]), g6(x.median_error[2]), g6(x.median_error[3]),
+                       coverage(0), coverage(1), coverage(2), coverage(3),
+                       std::to_string(*std::max_element(x.intervals.begin(), x.intervals.end())),
                        fmt::format("{:.4g}", x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)))});
     }
     return csv(table);
@@ -519,6 +562,7 @@ std::string study_csv(const StudyRun& run) {
 
 nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord& r) {
     const auto& c = run.cases[r.case_index];
+    auto covered = [&](std::size_t j) { return r.covered[j] < 0 ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(r.covered[j] == 1); };
     return {{"case", c.label},
             {"kind", c.kind},
             {"magnitude", c.magnitude},
@@ -533,6 +577,7 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"not_in_library", r.not_in_library},
             {"tie", r.tie},
             {"base_error", {{"Rs", r.base_error[0]}, {"Ld", r.base_error[1]}, {"Lq", r.base_error[2]}, {"psi_f", r.base_error[3]}}},
+            {"interval_holds_truth", {{"Rs", covered(0)}, {"Ld", covered(1)}, {"Lq", covered(2)}, {"psi_f", covered(3)}}},
             {"rms", r.rms},
             {"rms_recommended", r.rms_recommended},
             {"noise", r.noise},

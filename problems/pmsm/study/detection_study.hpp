@@ -9,6 +9,7 @@
 // on the averaged plant (`effects.deadtime.voltage = 0.28`) and on the device plant
 // (`plant.inverter.dead_time = 1e-6`) alike. Cases: clean data, each effect alone at both
 // magnitudes, pairs and listed triples at the clear magnitude, and effects the library lacks.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -90,6 +91,9 @@ struct StudyRecord {
     bool tie = false;
     std::vector<std::string> false_positives, missed;
     Eigen::Vector4d base_error = Eigen::Vector4d::Zero();  // (fitted - true) / true of Rs, Ld, Lq, psi_f, recommended model
+    // Whether the recommended model's 95 % interval of Rs, Ld, Lq, psi_f holds the true value: 1 yes,
+    // 0 no, -1 no interval (the data do not determine it).
+    std::array<int, 4> covered{-1, -1, -1, -1};
     double rms = 0.0, rms_recommended = 0.0, noise = 0.0;  // V
     double seconds = 0.0;               // simulate + diagnose, wall
 };
