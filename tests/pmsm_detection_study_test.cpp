@@ -132,5 +132,8 @@ TEST_CASE("device plant, several noise seeds: clear effects found alone, in a pa
     }
     const std::string table = study_markdown(spec, run);
     CHECK_THAT(table, Catch::Contains("95 % intervals holding the truth when correct: Rs, Ld, Lq, psi_f"));
-    CHECK(study_record_json(run, run.records.front())["interval_holds_truth"].size() == 4);
+    const auto record = study_record_json(run, run.records.front());
+    CHECK(record["interval_holds_truth"].size() == 4);
+    CHECK(record["structure_left"].get<double>() >= 0.0);
+    CHECK_THAT(table, Catch::Contains("the same where no structure is left"));
 }

@@ -94,6 +94,9 @@ struct StudyRecord {
     // Whether the recommended model's 95 % interval of Rs, Ld, Lq, psi_f holds the true value: 1 yes,
     // 0 no, -1 no interval (the data do not determine it).
     std::array<int, 4> covered{-1, -1, -1, -1};
+    // Power of the significant structure the recommended model leaves in the residual, relative to
+    // the noise's (0: none significant): what a misspecification mark on the intervals would read.
+    double structure_left = 0.0;
     double rms = 0.0, rms_recommended = 0.0, noise = 0.0;  // V
     double seconds = 0.0;               // simulate + diagnose, wall
 };
