@@ -62,28 +62,43 @@ inline void check_seed_fixes_run(const std::string& name, const PluginValues& va
     REQUIRE(other.trace_best != first.trace_best);
 }
 
-// The square root of the shifted sphere: the same ranking of every set of points, other values.
-class RootOfSphere final : public Problem {
+// The shifted sphere seen through a strictly increasing map of f: the same ranking of every set of
+// points, other values.
+template <class Map>
+class MappedSphere final : public Problem {
 public:
-    RootOfSphere(int dimension, double lower, double upper, double shift) : sphere_(dimension, lower, upper, shift) {
+    MappedSphere(int dimension, double lower, double upper, double shift, Map map) : sphere_(dimension, lower, upper, shift), map_(map) {
         set_domain(dimension, lower, upper);
     }
     void evaluate(const Eigen::Ref<const Matrix>& x, Eigen::Ref<Vector> f) const override {
         sphere_.evaluate(x, f);
-        f = f.cwiseSqrt();
+        f = f.unaryExpr(map_);
     }
 
 private:
     ShiftedSphere sphere_;
+    Map map_;
 };
 
 // An optimiser that only compares fitness values makes the same moves on f and on any strictly
 // increasing function of f.
 inline void check_invariance_to_monotone_transform(const std::string& name, const PluginValues& values) {
     const auto ra = run_thirty_iterations(name, values, ShiftedSphere(5, -5, 5, 0.7), 99);
-    const auto rb = run_thirty_iterations(name, values, RootOfSphere(5, -5, 5, 0.7), 99);
+    const auto rb = run_thirty_iterations(name, values, MappedSphere(5, -5, 5, 0.7, [](double v) { return std::sqrt(v); }), 99);
     REQUIRE(ra.trace_position == rb.trace_position);
     REQUIRE(rb.best_fitness == Approx(std::sqrt(ra.best_fitness)));
+}
+
+// The same moves on f and on 3 f + 7 (up to rounding in the weights, so positions agree to 1e-9).
+inline void check_invariance_to_affine_transform(const std::string& name, const PluginValues& values) {
+    const auto ra = run_thirty_iterations(name, values, ShiftedSphere(5, -5, 5, 0.7), 99);
+    // A positive affine map: an optimiser that weighs by differences of f (L-SHADE's memory weights)
+    // still makes the same moves.
+    const auto rb = run_thirty_iterations(name, values, MappedSphere(5, -5, 5, 0.7, [](double v) { return 3.0 * v + 7.0; }), 99);
+    REQUIRE(ra.trace_position.size() == rb.trace_position.size());
+    for (std::size_t k = 0; k < ra.trace_position.size(); ++k)
+        REQUIRE((ra.trace_position[k] - rb.trace_position[k]).cwiseAbs().maxCoeff() <= 1e-9);
+    REQUIRE(rb.best_fitness == Approx(3.0 * ra.best_fitness + 7.0));
 }
 
 // Best fitness after `evaluations` on the 10-D sphere centred at 1.5 in [-5, 5]^10, for seeds 1, 2, 3:
