@@ -8,7 +8,9 @@
 // 2: Evaluator gained the anytime recorder (a member, so its size changed).
 // 3: the PMSM headers moved into rooms (machine/, data/; the old paths forward); effects/effect.hpp no
 //    longer declares require_columns nor includes the measurement; LinearFlux left machine.hpp.
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 3
+// 4: Effect gained its operating scale (a member) and narrow_range, range_end_meaning and
+//    implausible_reason; plant_flux_model takes the plant's scale; the saturation law changed.
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 4
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

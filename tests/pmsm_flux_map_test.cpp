@@ -9,6 +9,7 @@
 #include "framework/random.hpp"
 #include "problems/pmsm/machine/flux_models.hpp"
 #include "problems/pmsm/fit/linear_fit.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
 #include "tests/pmsm_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -181,29 +182,29 @@ TEST_CASE("the flux-map plant settles where the measured map says", "[pmsm][flux
     }
 }
 
-TEST_CASE("the polynomial saturation model recovers the measured map", "[pmsm][flux_map][effects]") {
+TEST_CASE("the saturation effect's law recovers the measured map", "[pmsm][flux_map][effects]") {
     std::vector<Segment> segments;
     for (double rpm : {200.0, -300.0})
         for (double i_d : {0.0, -4.0, 4.0})
-            for (double torque : {3.0, 9.0}) segments.push_back({"s", rpm, rpm > 0 ? torque : -torque, i_d, 0.2, 20});
+            for (double torque : {3.0, 9.0, -9.0}) segments.push_back({"s", rpm, rpm > 0 ? torque : -torque, i_d, 0.2, 20});
     const auto result = simulate(baldor_drive(segments));
     const Eigen::Index n = result.data.size();
     Eigen::VectorXd y(2 * n);
     y << result.data.u_d, result.data.u_q;
-    std::vector<std::unique_ptr<Effect>> effects;
-    effects.push_back(make_effect("saturation"));
-    SteadyStateModel model(result.data, std::move(effects));
-    const Eigen::MatrixXd phi = linear_columns(model);
-    const auto base = solve_least_squares(phi.leftCols(4), y);
-    const auto saturating = solve_least_squares(phi, y);
+    SteadyStateModel model(result.data, {});
+    const auto base = solve_least_squares(linear_columns(model), y);
     const double base_rms = std::sqrt(base.rss / static_cast<double>(2 * n));
-    const double saturating_rms = std::sqrt(saturating.rss / static_cast<double>(2 * n));
+    FitOptions options;
+    options.intervals = false;
+    const auto saturating = fit_model(result.data, parse_model_spec("base+saturation"), options);
+    const double saturating_rms = saturating.rms.total;
     INFO("rms residual: base model " << base_rms << " V, with saturation " << saturating_rms << " V");
     CHECK(saturating_rms * 10 < base_rms);
-    // The resistance, which the base model gets wrong by absorbing the saturation, comes back.
-    CHECK(std::abs(base.solution[0] - 0.63) > 0.1);
-    CHECK(saturating.solution[0] == Approx(0.63).epsilon(0.03));
+    // Generating points (negative torque at positive speed) keep R_s i_q apart from the part of psi_d
+    // that is even in i_q: on motoring points alone both change sign with the direction, and R_s
+    // absorbs the misfit of the d axis (6 % here when measured, 2026-11-25).
+    CHECK(saturating.values[0] == Approx(0.63).epsilon(0.03));
     // ... and so do the map's magnet flux and small-signal q inductance.
-    CHECK(saturating.solution[3] == Approx(0.444146).epsilon(0.05));
-    CHECK(saturating.solution[2] == Approx((0.281523 - 0.0) / 2.0).epsilon(0.05));
+    CHECK(saturating.values[3] == Approx(0.444146).epsilon(0.05));
+    CHECK(saturating.values[2] == Approx((0.281523 - 0.0) / 2.0).epsilon(0.05));
 }

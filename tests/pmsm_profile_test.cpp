@@ -105,7 +105,7 @@ enabled = false
 offset = 0.05
 [effects.saturation]
 flux_map = "map.csv"
-k_q3 = -0.01
+q_self = 0.1
 [[segment]]
 label = 7
 speed = -5

@@ -54,6 +54,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.tie = std::move(r.tie);
     out.tie_experiments = std::move(r.tie_experiments);
     out.not_in_library = r.not_in_library;
+    out.incomplete = r.incomplete;
     out.findings = findings_of(out, trace.left.back(), options.floor_tolerance);
     return out;
 }

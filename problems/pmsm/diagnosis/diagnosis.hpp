@@ -177,6 +177,9 @@ struct Diagnosis {
     std::vector<std::string> tie;        // effects the evidence cannot order (at the step where the search stopped)
     std::vector<Experiment> tie_experiments;
     bool not_in_library = false;
+    // The recommended set explains most of the excess residual but not all: something else is
+    // missing too, of the signature its residual shows (path.back().signature).
+    bool incomplete = false;
     // The search over sets of effects (forward selection with backward pruning, docs/effects.md):
     // the steps from the model diagnosed to the last set the evidence supports, the effects pruned
     // again because the others explain them, and the recommendation: the last set when it reaches

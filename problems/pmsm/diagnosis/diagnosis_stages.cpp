@@ -104,7 +104,7 @@ void score_candidate(Candidate& c, const Measurement& data, const Measurement& d
     c.delta_bic = -c.likelihood_ratio + c.added_parameters * log_n;
     c.explained = explained_fraction(model, c.fit, static_cast<double>(data.size()) * noise.sigma.squaredNorm());
     check_base(c.fit, c.implausible);
-    check_effects(c.fit, c.implausible);
+    check_effects(c.fit, data, c.implausible);
     c.plausible = c.implausible.empty();
     c.unique_fraction = most_distinct(design_unique_fractions(design, spec, model.values, c.effect));
     c.identifiability = identifiability_of(c.unique_fraction);
@@ -147,7 +147,7 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
         PathStep step;
         step.fit = s.fit;
         check_base(step.fit, step.implausible);
-        check_effects(step.fit, step.implausible);
+        check_effects(step.fit, data, step.implausible);
         step.plausible = step.implausible.empty();
         step.kind = s.kind;
         step.effect = s.effect;
@@ -168,7 +168,10 @@ Recommendation recommend(const ModelSpec& spec, const SetSearch& search, const P
     Recommendation r;
     const PathStep& last = trace.path.back();
     // A search that stopped on a tie found what it could: the rest is one of the tied effects.
-    const bool found = trace.path.size() > 1 && last.plausible && (last.at_noise_floor || !search.tie.empty());
+    const bool plausible = trace.path.size() > 1 && last.plausible;
+    const bool complete = plausible && (last.at_noise_floor || !search.tie.empty());
+    const bool found = complete || (plausible && last.explained >= evidence::most_of_the_excess);
+    r.incomplete = found && !complete;
     r.recommended = found ? last.fit.spec : spec;
     r.tie = search.tie;
     r.missing_effect_found = found || !r.tie.empty();

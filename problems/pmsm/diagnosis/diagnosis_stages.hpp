@@ -80,10 +80,13 @@ struct Recommendation {
     std::vector<std::string> tie;
     std::vector<Experiment> tie_experiments;
     bool not_in_library = false;
+    // Recommended without reaching the noise floor: something else is missing too.
+    bool incomplete = false;
 };
-// The last set of the path when it reaches the noise floor with plausible values (or the search
-// stopped on a tie), `spec` otherwise; "not in the library" only when no set of library effects
-// reaches the noise floor with plausible values while the model does not.
+// The last set of the path when it is plausible and reaches the noise floor (or the search stopped on
+// a tie), or explains most of the model's excess residual (evidence::most_of_the_excess; then
+// `incomplete`); `spec` otherwise. "Not in the library" only when no set of library effects is
+// recommended while the model leaves structure.
 Recommendation recommend(const ModelSpec& spec, const SetSearch& search, const PathTrace& trace, const LackOfFit& model_left,
                          const Measurement& design, const std::vector<Proposal>& proposals);
 

@@ -44,10 +44,16 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     NoiseEstimate noise = noise_of_best(data, fits);
     noise.dispersion = 1.0;
     const double log_n = std::log(std::max(noise.effective_samples, 2.0));
+    const double rows = static_cast<double>(data.size());
+    const double excess = current.rss() - rows * noise.sigma.squaredNorm();
+    const double resolution = std::sqrt(noise.sigma.squaredNorm() / 2.0);
     std::vector<std::pair<double, const Addition*>> supported;
     for (const auto& a : round) {
         const double dbic = -likelihood_ratio(current, a.fit, noise) + a.added_parameters * log_n;
         if (dbic > supported_bic) continue;
+        const double change = current.rss() - a.fit.rss();
+        if (excess > 0.0 && change < relevant_share * excess) continue;
+        if (!(std::sqrt(std::max(change, 0.0) / (2.0 * rows)) >= relevant_voltage * resolution)) continue;
         if (identifiability_of(most_distinct(design_unique_fractions(design, current.spec, current.values, a.effect))) ==
             Identifiability::NotIdentifiable)
             continue;

@@ -102,10 +102,17 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
         for (std::size_t k = 1; k < d.path.size(); ++k)
             steps += fmt::format("{} {} {:.4g} V (dBIC {:.1f})", k == 1 ? "" : ",", d.path[k].change(), d.path[k].fit.rms.total, d.path[k].delta_bic);
         f.push_back(fmt::format("Missing effects: {} together (recommended model {}; their fit: {}). The residual falls from {:.4g} V rms "
-                                "step by step:{}, to the noise floor of {:.3g} V.",
-                                join(added), last.fit.spec.text(), effect_values(last.fit, m.values.size()), m.rms.total, steps, floor));
+                                "step by step:{}, {} the noise floor of {:.3g} V.",
+                                join(added), last.fit.spec.text(), effect_values(last.fit, m.values.size()), m.rms.total, steps,
+                                d.incomplete ? "towards" : "to", floor));
     }
-    if (!last.signature.empty())
+    if (d.incomplete)
+        f.push_back(fmt::format("Something else is missing too: {} explains {:.0f} % of the excess residual, and what it leaves is above the "
+                                "noise floor of {:.3g} V ({}). No library effect added to it explains that; its values and intervals hold "
+                                "only as far as this structure does not bias them.",
+                                last.fit.spec.text(), 100.0 * last.explained, floor,
+                                last.signature.empty() ? std::string("structure beyond the noise") : last.signature));
+    else if (!last.signature.empty())
         f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
                                 "the steady-state model's own error on effects that make the currents ripple; a larger one would mean "
                                 "another effect.",

@@ -69,15 +69,33 @@ void check_base(const ModelFit& fit, std::vector<std::string>& problems) {
     }
 }
 
-void check_effects(const ModelFit& fit, std::vector<std::string>& problems) {
-    for (Eigen::Index j = 4; j < fit.values.size(); ++j) {
-        if (!fit.at_bound(j)) continue;
-        const bool at_lower = fit.values[j] <= fit.range_lower[j] + 1e-9 * (fit.range_upper[j] - fit.range_lower[j]);
-        // Zero is a magnitude's natural floor (no band, no harmonic, no delay), not an implausible value.
-        if (at_lower && fit.range_lower[j] == 0.0) continue;
-        problems.push_back(fmt::format("{} = {:.4g} {} sits at the {} end of its plausible range [{:g}, {:g}]",
-                                       fit.names[static_cast<std::size_t>(j)], fit.values[j], fit.units[static_cast<std::size_t>(j)],
-                                       at_lower ? "lower" : "upper", fit.range_lower[j], fit.range_upper[j]));
+void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std::string>& problems) {
+    if (fit.spec.effects.empty()) return;
+    // The model's effects know the data's scale, and with it their ranges and what their ends mean.
+    const auto model = make_model(fit.spec, data);
+    // The logged currents the machine must be physical at: every row of a short log, an even spread
+    // of 4096 of a long one (a saturation curve does not change between neighbouring rows).
+    const Eigen::Index stride = std::max<Eigen::Index>(1, data.size() / 4096);
+    const Eigen::Index count = (data.size() + stride - 1) / stride;
+    const Eigen::ArrayXd i_d = Eigen::Map<const Eigen::ArrayXd, 0, Eigen::InnerStride<>>(data.i_d.data(), count, Eigen::InnerStride<>(stride));
+    const Eigen::ArrayXd i_q = Eigen::Map<const Eigen::ArrayXd, 0, Eigen::InnerStride<>>(data.i_q.data(), count, Eigen::InnerStride<>(stride));
+    Eigen::Index j = 4;
+    for (const auto& effect : model->effects()) {
+        const Eigen::Index first = j;
+        for (std::size_t k = 0; k < effect->parameter_names().size(); ++k, ++j) {
+            const bool beyond = fit.beyond_range(j);
+            if (!(beyond || fit.at_bound(j)) || !effect->range_end_implausible(k)) continue;
+            const bool at_lower = fit.values[j] <= fit.range_lower[j] + 1e-9 * (fit.range_upper[j] - fit.range_lower[j]);
+            // Zero is a magnitude's natural floor (no band, no harmonic, no delay), not an implausible value.
+            if (at_lower && !beyond && fit.range_lower[j] == 0.0) continue;
+            const std::string meaning = effect->range_end_meaning(k, !at_lower);
+            problems.push_back(fmt::format("{} = {:.4g} {} {} {} end of its plausible range{} [{:g}, {:g}]{}{}",
+                                           fit.names[static_cast<std::size_t>(j)], fit.values[j], fit.units[static_cast<std::size_t>(j)],
+                                           beyond ? "lies beyond the" : "sits at the", at_lower ? "lower" : "upper", beyond ? " for this log" : "",
+                                           fit.range_lower[j], fit.range_upper[j], meaning.empty() ? "" : ": ", meaning));
+        }
+        const std::string reason = effect->implausible_reason(fit.values.data() + first, fit.values.data(), i_d, i_q);
+        if (!reason.empty()) problems.push_back(fmt::format("{}: {}", effect->name(), reason));
     }
 }
 

@@ -36,8 +36,11 @@ bool predicts_held_out(const Measurement& data, const ModelFit& candidate, const
 // Appends to `problems` each base parameter that is not positive or outside Table 2's box.
 void check_base(const ModelFit& fit, std::vector<std::string>& problems);
 
-// Appends to `problems` each effect parameter at an end of its plausible range (but a magnitude at 0).
-void check_effects(const ModelFit& fit, std::vector<std::string>& problems);
+// Appends to `problems` each effect parameter at an end of its plausible range (but a magnitude at 0,
+// and a shape whose effect says its range end is not implausible),
+// with what that end means when its effect says, and each effect's reason why the fitted machine is
+// physically impossible at the logged currents (Effect::implausible_reason).
+void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std::string>& problems);
 
 // Each free parameter refitted alone on each segment, the others held at the global fit: the value
 // that segment asks for, appended to each segment's `apparent` (and the parameter names to `names`).

@@ -55,9 +55,14 @@ double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const 
 }
 
 NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const ModelFit*>& fits) {
+    // Only a physically possible machine measures the noise: a flexible effect that buys a lower
+    // residual with a negative inductance has fitted the noise itself (on two operating points the
+    // saturation law's incremental inductances follow the controller's correlation of current and
+    // voltage noise), and would set the floor below the sensors'.
+    const auto possible = [](const ModelFit* f) { return f->values.size() < 4 || (f->values.head<4>().array() > 0.0).all(); };
     const ModelFit* best = fits.front();
     for (const auto* f : fits)
-        if (f->rss() < best->rss()) best = f;
+        if (possible(f) && (f->rss() < best->rss() || !possible(best))) best = f;
     NoiseEstimate noise = estimate_noise(data, *best);
     Eigen::VectorXd storage;
     const LackOfFit l = lack_of_fit(data, *best, residual_of(data, *best, storage), noise);

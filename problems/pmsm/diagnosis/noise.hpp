@@ -15,7 +15,8 @@ NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit);
 // Sum over axes of (RSS_model - RSS_candidate) / long-run variance, divided by the dispersion.
 double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const NoiseEstimate& noise);
 
-// The noise measured on the best-fitting of `fits` (the first of equals), with the overdispersion
+// The noise measured on the best-fitting of `fits` whose base parameters are all positive (the first
+// of equals; the first fit when none is), with the overdispersion
 // of its segment means: when even the best model tried leaves segment means that the noise cannot
 // explain, every likelihood ratio is divided by that excess (Q / dof), as a quasi-likelihood does.
 NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const ModelFit*>& fits);

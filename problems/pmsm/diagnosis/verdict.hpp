@@ -13,6 +13,18 @@ inline constexpr double tie_margin = 6.0;       // below "strong" preference bet
 inline constexpr double absorbed_below = 1e-6;  // unique fraction: in the span of the model's columns
 inline constexpr double clear_above = 0.1;      // unique fraction: at least a tenth of the signature is its own
 inline constexpr double significance = 1e-3;    // p-value of structure beyond chance (lack of fit, drifts)
+// A plausible set that does not reach the noise floor is still recommended when it explains at least
+// this share of the model's excess residual: then what it adds is most of what is missing, and the
+// rest is named as "something else", with its signature.
+inline constexpr double most_of_the_excess = 0.5;
+// Evidence alone grows with the rows: on a long log, or beside a model whose shape misses the data,
+// any effect with a free parameter would earn its place by absorbing a sliver of the misfit. So an
+// effect is added to a set only when it is also relevant, by two measures that do not grow with the
+// rows: it explains at least `relevant_share` of the excess residual the set still leaves, and it
+// changes the modelled voltage by at least `relevant_voltage` of the noise's rms (the resolution of
+// one sample).
+inline constexpr double relevant_share = 0.1;
+inline constexpr double relevant_voltage = 0.1;
 
 }  // namespace mhb::pmsm::evidence
 

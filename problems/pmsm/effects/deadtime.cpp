@@ -6,6 +6,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <fmt/format.h>
+
 #include "problems/pmsm/effects/effect.hpp"
 
 namespace mhb::pmsm {
@@ -38,6 +40,8 @@ private:
     double voltage_, band_, per_ampere_;
 };
 
+inline constexpr double max_band_fraction = 0.2;
+
 class DeadTime final : public Effect {
 public:
     explicit DeadTime(const ParameterSet& p) : Effect("deadtime", p) {}
@@ -49,6 +53,19 @@ public:
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     bool model_linear_in(std::size_t k) const override { return k == 0; }  // the voltage, not the band
+
+    // A band over a large part of the logged current makes the loss proportional to the current: a
+    // resistance, which R_s already is. The band's physical causes (ripple, snubber charge) are a
+    // small fraction of the current the inverter is rated for.
+    void narrow_range(std::size_t k, double&, double& hi) const override {
+        if (k == 1) hi = std::min(hi, max_band_fraction * scale().current);
+    }
+    std::string range_end_meaning(std::size_t k, bool upper) const override {
+        if (k == 1 && upper)
+            return fmt::format("a band this wide ({:g} of the largest logged current) acts as a resistance: it is confounded with Rs",
+                               max_band_fraction);
+        return {};
+    }
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
             const TerminalLoss loss(p[0], p[1]);

@@ -83,6 +83,16 @@ struct ModelState {
     void rotate_angle(double delta);
 };
 
+// The size of the currents and flux linkages a model or a plant works at, for effects whose
+// parameters are stated per unit of them or whose plausible range follows them. A model takes it
+// from the logged data (model/steady_state_model.hpp: the largest logged current, the largest
+// |u| / |omega| where the speed is not small), a plant from its drive (the current limit, the magnet
+// flux); 1 A and 1 Wb until one of them sets it.
+struct OperatingScale {
+    double current = 1.0;  // A: largest current amplitude
+    double flux = 1.0;     // Wb: largest flux-linkage amplitude
+};
+
 // What the plant knows at an instant, for effects that depend on operating conditions.
 struct PlantConditions {
     double temp_winding = reference_temperature;  // °C
@@ -100,6 +110,8 @@ public:
     const Eigen::VectorXd& values() const { return values_; }
     const std::vector<ParameterSpec>& parameter_specs() const { return specs_; }
     const ParameterSet& settings() const { return settings_; }
+    const OperatingScale& scale() const { return scale_; }
+    void set_scale(const OperatingScale& scale) { scale_ = scale; }
 
     // ---- plant side: defaults do nothing ----
     // Measured electrical angle minus the true one (rad).
@@ -112,8 +124,9 @@ public:
     virtual Complex plant_command_shortfall() const { return {}; }
     // Resistance and magnet flux under the present conditions (called with nominal values first).
     virtual void plant_coefficients(const PlantConditions&, double& /*rs*/, double& /*psi_f*/) const {}
-    // A flux model replacing the linear one (nullptr: keep it). Paths resolve against base_directory.
-    virtual std::unique_ptr<FluxModel> plant_flux_model(const MotorParameters&,
+    // A flux model replacing the linear one (nullptr: keep it), at the plant's scale (its current
+    // limit and magnet flux). Paths resolve against base_directory.
+    virtual std::unique_ptr<FluxModel> plant_flux_model(const MotorParameters&, const OperatingScale& /*plant*/,
                                                         const std::filesystem::path& /*base_directory*/) const {
         return nullptr;
     }
@@ -141,12 +154,31 @@ public:
     // (tests/pmsm_steady_state_model_test.cpp); an effect acting in the sensor stages never is.
     virtual bool model_linear_in(std::size_t /*k*/) const { return false; }
 
+    // ---- what the data allow ----
+    // Narrows the plausible range [lo, hi] of real parameter k to what data of this scale() can tell
+    // apart from other effects (e.g. a dead-time band wider than a fraction of the logged current
+    // acts as a resistance).
+    virtual void narrow_range(std::size_t /*k*/, double& /*lo*/, double& /*hi*/) const {}
+    // What it means when real parameter k sits at the lower (or upper) end of its range, for the
+    // user; empty when nothing more than "at the end of its range" can be said.
+    virtual std::string range_end_meaning(std::size_t /*k*/, bool /*upper*/) const { return {}; }
+    // Whether real parameter k at an end of its range makes the fit implausible: true for a physical
+    // magnitude; false for a shape (a knee, an exponent), whose range is only as far as the law goes.
+    virtual bool range_end_implausible(std::size_t /*k*/) const { return true; }
+    // Why the whole model is physically impossible with these effect parameters p and base parameters
+    // base (Rs, Ld, Lq, psi_f) at the rotor-frame currents (i_d, i_q) of the log; empty when possible.
+    virtual std::string implausible_reason(const double* /*p*/, const double* /*base*/, const Eigen::ArrayXd& /*i_d*/,
+                                           const Eigen::ArrayXd& /*i_q*/) const {
+        return {};
+    }
+
 private:
     std::string name_;
     ParameterSet settings_;
     std::vector<ParameterSpec> specs_;
     std::vector<std::string> parameter_names_;
     Eigen::VectorXd values_;
+    OperatingScale scale_;
 };
 
 using EffectFactory = std::function<std::unique_ptr<Effect>(const ParameterSet&)>;

@@ -1,14 +1,14 @@
 // Magnetic saturation and cross-saturation. Model side: the flux linkages of the base model plus the
-// derivatives of a polynomial magnetic co-energy
-//   W = k_d2 i_d^3/3 + k_d3 i_d^4/4 + k_q3 i_q^4/4 + k_q5 i_q^6/6
-//       + k_dq1 i_d i_q^2/2 + k_dq2 i_d^2 i_q^2/2 + k_dq3 i_d i_q^4/4,
-//   Delta psi_d = k_d2 i_d^2 + k_d3 i_d^3 + k_dq1 i_q^2/2 + k_dq2 i_d i_q^2 + k_dq3 i_q^4/4,
-//   Delta psi_q = k_q3 i_q^3 + k_q5 i_q^5 + k_dq1 i_d i_q + k_dq2 i_d^2 i_q + k_dq3 i_d i_q^3,
-// which keeps the machine reciprocal (d psi_d/d i_q = d psi_q/d i_d) and is linear in its coefficients.
-// The terms are the lowest orders that respect the symmetry of a PM machine (psi_q odd in i_q, psi_d
-// even in i_q); the fifth-order q terms are what a strongly saturating q axis needs.
-// Plant side: the same polynomial, or a measured flux map (`flux_map`, a CSV path) that then replaces
-// the whole flux model of the plant (Ld, Lq and psi_f of the motor are used only by the controller).
+// gradient of a co-energy in per-unit currents (machine/flux_models.hpp, CoenergySaturation): q-axis
+// self-saturation through a knee, cross-saturation as a power law, and the magnet-side asymmetry of
+// the d axis. Reciprocal by construction; the coefficients are per unit of
+// the log's flux and the currents per unit of its largest current (Effect::scale()), so their ranges
+// mean the same on any machine; the fitted machine must keep positive incremental inductances over
+// the logged currents (implausible_reason). docs/effects.md, "The saturation effect", says why this
+// law and what it replaced.
+// Plant side: the same law at the drive's scale (its current limit and magnet flux), or a measured flux map (`flux_map`, a CSV path) that
+// then replaces the whole flux model of the plant (Ld, Lq and psi_f of the motor are used only by the
+// controller).
 #include <fmt/format.h>
 
 #include "problems/pmsm/effects/effect.hpp"
@@ -21,38 +21,74 @@ class Saturation final : public Effect {
 public:
     explicit Saturation(const ParameterSet& p) : Effect("saturation", p) {}
 
-    std::unique_ptr<FluxModel> plant_flux_model(const MotorParameters& motor,
+    std::unique_ptr<FluxModel> plant_flux_model(const MotorParameters& motor, const OperatingScale& plant,
                                                 const std::filesystem::path& base_directory) const override {
         const auto& map = settings().text("flux_map");
         if (!map.empty()) {
             const std::filesystem::path path = std::filesystem::path(map).is_absolute() ? std::filesystem::path(map) : base_directory / map;
             return std::make_unique<FluxMap>(FluxMap::read(path, motor.psi_f));
         }
-        return std::make_unique<PolynomialFlux>(motor.ld, motor.lq, values());
+        return std::make_unique<CoenergySaturatedFlux>(motor.ld, motor.lq, CoenergySaturation::from(values().data(), plant.current, plant.flux));
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::FluxLinkage); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
-    bool model_linear_in(std::size_t) const override { return true; }
-    void model(ModelStage, const double* k, ModelState& s) const override {
+    // The coefficients; not the knee and the exponent.
+    bool model_linear_in(std::size_t k) const override { return k != 1 && k != 3; }
+    void model(ModelStage, const double* p, ModelState& s) const override {
+        const CoenergySaturation l = law(p);
         for (Eigen::Index j = 0; j < s.psi_d.size(); ++j) {
-            const Complex change = polynomial_flux_change(k, s.i_d[j], s.i_q[j]);
+            const Complex change = l.flux_change(s.i_d[j], s.i_q[j]);
             s.psi_d[j] += change.real();
             s.psi_q[j] += change.imag();
         }
     }
+
+    bool range_end_implausible(std::size_t k) const override { return k != 1 && k != 3; }
+    std::string range_end_meaning(std::size_t k, bool upper) const override {
+        switch (k) {
+        case 1:
+            return upper ? "the knee lies beyond the logged currents, which show only its onset"
+                         : "the knee lies below the logged currents: the q inductance is simply lower, which L_q already is";
+        case 3: return "cross-saturation rising more steeply with |i_q| than this log resolves";
+        default: return "an inductance change as large as the log's whole flux per unit of its current";
+        }
+    }
+
+    std::string implausible_reason(const double* p, const double* base, const Eigen::ArrayXd& i_d,
+                                   const Eigen::ArrayXd& i_q) const override {
+        const CoenergySaturation l = law(p);
+        for (Eigen::Index j = 0; j < i_d.size(); ++j) {
+            Inductance m = l.inductance_change(i_d[j], i_q[j]);
+            m[0] += base[1];
+            m[3] += base[2];
+            // Positive definite: a stored energy that rises with every current change.
+            if (m[0] > 0.0 && m[3] > 0.0 && m[0] * m[3] - m[1] * m[2] > 0.0) continue;
+            return fmt::format("the fitted machine's incremental inductance is not positive definite at i_d = {:.4g} A, "
+                               "i_q = {:.4g} A (L_dd {:.4g} H, L_qq {:.4g} H, L_dq {:.4g} H): its flux would fall as its current rises",
+                               i_d[j], i_q[j], m[0], m[3], m[1]);
+        }
+        return {};
+    }
+
+private:
+    CoenergySaturation law(const double* p) const { return CoenergySaturation::from(p, scale().current, scale().flux); }
 };
 
 const bool registered = register_effect({
     "saturation",
-    "Saturation and cross-saturation: polynomial co-energy model, or a measured flux map on the plant",
-    {ParameterSpec::real("k_d2", 0.0, -1.0, 1.0, "d flux term k_d2 i_d^2 (magnet-side asymmetry)", "Wb/A^2"),
-     ParameterSpec::real("k_d3", 0.0, -1.0, 1.0, "d self-saturation k_d3 i_d^3", "Wb/A^3"),
-     ParameterSpec::real("k_q3", 0.0, -1.0, 1.0, "q self-saturation k_q3 i_q^3", "Wb/A^3"),
-     ParameterSpec::real("k_q5", 0.0, -1.0, 1.0, "q self-saturation k_q5 i_q^5", "Wb/A^5"),
-     ParameterSpec::real("k_dq1", 0.0, -1.0, 1.0, "cross-saturation, psi_d += k i_q^2/2, psi_q += k i_d i_q", "Wb/A^2"),
-     ParameterSpec::real("k_dq2", 0.0, -1.0, 1.0, "cross-saturation, psi_d += k i_d i_q^2, psi_q += k i_d^2 i_q", "Wb/A^3"),
-     ParameterSpec::real("k_dq3", 0.0, -1.0, 1.0, "cross-saturation, psi_d += k i_q^4/4, psi_q += k i_d i_q^3", "Wb/A^4"),
+    "Saturation and cross-saturation: a reciprocal power-law co-energy per unit of the log's current and flux, or a measured flux map on the plant",
+    {ParameterSpec::real("q_self", 0.0, 0.0, 5.0, "q self-saturation: the fall of the q incremental inductance past the knee",
+                         "per unit of Psi_b / I_b"),
+     ParameterSpec::real("q_knee", 0.5, 0.02, 5.0, "the q axis's knee current", "per unit of I_b"),
+     ParameterSpec::real("cross", 0.0, -5.0, 5.0, "cross-saturation: psi_d falls by cross Psi_b |y|^(V+2)/(V+2), psi_q by cross Psi_b x |y|^V y",
+                         "per unit of Psi_b"),
+     ParameterSpec::real("cross_exponent", 2.0, 1.0, 12.0, "V, how the cross-saturation grows with |i_q|", ""),
+     ParameterSpec::real("d_even", 0.0, -5.0, 5.0, "magnet-side asymmetry of the d axis: psi_d rises by d_even Psi_b x^2", "per unit of Psi_b"),
+     ParameterSpec::real("cross_square", 0.0, -5.0, 5.0,
+                         "cross-saturation to second order: psi_d falls by cross_square Psi_b y^2/2, psi_q by cross_square Psi_b x y (negative: "
+                         "psi_d rises, as where the q flux saturates a rotor bridge)",
+                         "per unit of Psi_b"),
      ParameterSpec::text("flux_map", "", "plant only: CSV flux map (i_d_A, i_q_A, psi_d_Vs, psi_q_Vs) replacing the plant's flux model")},
     [](const ParameterSet& p) { return std::make_unique<Saturation>(p); },
 });

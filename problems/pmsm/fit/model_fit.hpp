@@ -17,6 +17,9 @@
 
 namespace mhb::pmsm {
 
+// Fewer segments than this give a jackknife too noisy to judge intervals by.
+inline constexpr std::size_t minimum_jackknife_segments = 6;
+
 struct FitOptions {
     std::string optimizer = "cmaes";
     std::int64_t evaluations = 0;  // optimiser budget; 0: 150 + 50 per searched parameter
@@ -55,7 +58,7 @@ struct ModelFit {
     Eigen::VectorXd values;              // all parameters
     Eigen::VectorXd lower, upper;        // 95 % interval; NaN when the data do not determine it, the value when fixed
     Eigen::VectorXd standard_error;      // NaN as above, 0 when fixed
-    Eigen::VectorXd range_lower, range_upper;  // Table 2's box for the base, each effect's plausible range
+    Eigen::VectorXd range_lower, range_upper;  // Table 2's box for the base, each effect's plausible range for these data
     std::vector<bool> periodic;          // angles whose range is a full turn
     Eigen::Index samples = 0;
     Eigen::VectorXd residual;            // logged minus predicted: samples d rows, then samples q rows (empty unless kept)
@@ -63,6 +66,13 @@ struct ModelFit {
     AxisRms rms;
     std::vector<SegmentResidual> segments;  // one per segment (one "all" when the data have none)
     ParameterUncertainty uncertainty;    // of the free parameters (in the order of `free`)
+    // Per parameter: its interval is the jackknife's over segments, wider than the model-based one,
+    // because the segments pull it apart by more than the noise would (the model misses structure
+    // between them); empty when no intervals were computed or the data have too few segments.
+    std::vector<bool> segment_spread;
+    bool spread_widened(Eigen::Index j) const {
+        return static_cast<std::size_t>(j) < segment_spread.size() && segment_spread[static_cast<std::size_t>(j)];
+    }
     std::int64_t evaluations = 0;        // optimiser evaluations
     int polish_iterations = 0;           // Levenberg-Marquardt iterations
     std::string method;                  // how it was fitted, in words
@@ -73,6 +83,9 @@ struct ModelFit {
     Eigen::Index index_of(const std::string& name) const;  // -1 when absent
     // Free parameter at a bound of its range (a periodic angle never is).
     bool at_bound(Eigen::Index j) const;
+    // Free effect parameter outside its plausible range for these data (inside the declared range the
+    // fit searched, SteadyStateModel::plausible).
+    bool beyond_range(Eigen::Index j) const;
 };
 
 // Fits `spec` to all rows of `data`. Effect parameters listed in `search` (indices into the model's

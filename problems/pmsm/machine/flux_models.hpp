@@ -2,6 +2,7 @@
 // Every flux model of the machine in one place, the way the plants use them: the linear machine of
 // the base model, iron saturating with stored magnetic energy (the device plant), the saturation
 // effect's polynomial co-energy, and a measured flux map.
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -59,32 +60,73 @@ private:
     double ld_, lq_, q_sat_;
 };
 
-// The saturation effect's polynomial co-energy (effects/saturation.cpp gives it): the change of the
-// flux linkages from the linear machine's. Coefficient order: k_d2, k_d3, k_q3, k_q5, k_dq1, k_dq2, k_dq3.
-inline Complex polynomial_flux_change(const double* k, double id, double iq) {
-    const double iq2 = iq * iq;
-    return {k[0] * id * id + k[1] * id * id * id + 0.5 * k[4] * iq2 + k[5] * id * iq2 + 0.25 * k[6] * iq2 * iq2,
-            k[2] * iq2 * iq + k[3] * iq2 * iq2 * iq + k[4] * id * iq + k[5] * id * id * iq + k[6] * id * iq2 * iq};
-}
+// The saturation effect's law (effects/saturation.cpp gives it; docs/effects.md, "The saturation
+// effect"): the change of the flux linkages from the linear machine's, as the gradient of a magnetic
+// co-energy in per-unit currents x = i_d / I_b, y = i_q / I_b. The q axis saturates through a knee:
+// its incremental inductance falls by q (per unit of Psi_b / I_b) from its small-current value,
+// smoothly around the knee current k (per unit of I_b),
+//   Delta psi_q = -Psi_b q (y - k g(y / k)),   g(z) = z / sqrt(1 + z^2);
+// the d flux changes with |i_q| (cross-saturation: it may first rise, where the q flux saturates a
+// rotor bridge that short-circuits magnet flux, then fall as the iron saturates), and the d axis's
+// inductance changes linearly with i_d, the magnet-side asymmetry (e):
+//   w(x, y) = -q (y^2/2 - k^2 (sqrt(1 + (y/k)^2) - 1)) - a x y^2/2 - c x |y|^(V+2)/(V+2) + e x^3/3.
+// Nothing more on the d axis: a steady-state log holds a few d currents (often three), and a knee or
+// a cubic among them trades against L_d and psi_f (docs/effects.md).
+// Reciprocal (d psi_d/d i_q = d psi_q/d i_d) by construction; neither value nor slope at zero current,
+// so L_d, L_q and psi_f keep their meaning as the small-current inductances and the magnet flux.
+struct CoenergySaturation {
+    static constexpr int count = 6;
+    // In the effect's declaration order: q, k, c, V, e, a.
+    double q = 0.0, knee = 1.0, c = 0.0, v = 2.0, e = 0.0, a = 0.0;
+    double base_current = 1.0, base_flux = 1.0;
 
-class PolynomialFlux final : public FluxModel {
-public:
-    PolynomialFlux(double ld, double lq, const Eigen::VectorXd& k) : ld_(ld), lq_(lq) {
-        for (int j = 0; j < 7; ++j) k_[j] = k[j];
+    static CoenergySaturation from(const double* p, double base_current, double base_flux) {
+        return {p[0], p[1], p[2], p[3], p[4], p[5], base_current, base_flux};
     }
+    // The same law stated per unit of other scales (a plant's and a log's differ).
+    CoenergySaturation rescaled(double current, double flux) const {
+        const double ci = base_current / current, cf = base_flux / flux;
+        return {q * cf / ci, knee * ci, c * cf * std::pow(ci, -(v + 2.0)), v, e * cf / (ci * ci), a * cf / (ci * ci), current, flux};
+    }
+    std::array<double, count> values() const { return {q, knee, c, v, e, a}; }
+    // The flux the axis loses to its knee, per unit (u - k g(u/k)), and its slope 1 - g'(u/k).
+    static double knee_loss(double u, double k) { return u - u / std::sqrt(1.0 + (u / k) * (u / k)); }
+    static double knee_slope(double u, double k) {
+        const double r = 1.0 + (u / k) * (u / k);
+        return 1.0 - 1.0 / (r * std::sqrt(r));
+    }
+    Complex flux_change(double id, double iq) const {
+        const double x = id / base_current, y = iq / base_current, ay = std::abs(y);
+        const double yv = std::pow(ay, v);
+        return {base_flux * (-0.5 * a * y * y - c * yv * ay * ay / (v + 2.0) + e * x * x),
+                base_flux * (-q * knee_loss(y, knee) - (a + c * yv) * x * y)};
+    }
+    // d(Delta psi_d, Delta psi_q)/d(i_d, i_q), {dd, dq, qd, qq}: symmetric, the Hessian of the co-energy change.
+    Inductance inductance_change(double id, double iq) const {
+        const double x = id / base_current, y = iq / base_current, ay = std::abs(y);
+        const double per_ampere = base_flux / base_current, yv = std::pow(ay, v);
+        const double cross = per_ampere * (-(a + c * yv) * y);
+        return {per_ampere * 2.0 * e * x, cross, cross, per_ampere * (-q * knee_slope(y, knee) - (a + c * (v + 1.0) * yv) * x)};
+    }
+};
+
+// The linear machine with the saturation effect's change (the plant side of the effect).
+class CoenergySaturatedFlux final : public FluxModel {
+public:
+    CoenergySaturatedFlux(double ld, double lq, const CoenergySaturation& law) : ld_(ld), lq_(lq), law_(law) {}
     Complex flux(Complex i, double psi_f) const override {
-        return Complex{ld_ * i.real() + psi_f, lq_ * i.imag()} + polynomial_flux_change(k_, i.real(), i.imag());
+        return Complex{ld_ * i.real() + psi_f, lq_ * i.imag()} + law_.flux_change(i.real(), i.imag());
     }
     Inductance incremental_inductance(Complex i) const override {
-        const double id = i.real(), iq = i.imag(), iq2 = iq * iq;
-        const double cross = k_[4] * iq + 2.0 * k_[5] * id * iq + k_[6] * iq2 * iq;
-        return {ld_ + 2.0 * k_[0] * id + 3.0 * k_[1] * id * id + k_[5] * iq2, cross, cross,
-                lq_ + 3.0 * k_[2] * iq2 + 5.0 * k_[3] * iq2 * iq2 + k_[4] * id + k_[5] * id * id + 3.0 * k_[6] * id * iq2};
+        Inductance l = law_.inductance_change(i.real(), i.imag());  // {dd, dq, qd, qq}
+        l[0] += ld_;
+        l[3] += lq_;
+        return l;
     }
 
 private:
     double ld_, lq_;
-    double k_[7];
+    CoenergySaturation law_;
 };
 
 // A measured flux map psi_d(i_d, i_q), psi_q(i_d, i_q) on a rectangular current grid, used as a

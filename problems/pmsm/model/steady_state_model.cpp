@@ -1,5 +1,7 @@
 #include "problems/pmsm/model/steady_state_model.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <mutex>
 
@@ -39,6 +41,23 @@ Bounds base_parameter_bounds() {
     return b;
 }
 
+OperatingScale operating_scale_of(const Measurement& data) {
+    OperatingScale scale;
+    if (data.size() == 0) return scale;
+    const double current = std::sqrt((data.i_d.array().square() + data.i_q.array().square()).maxCoeff());
+    if (current > 0.0) scale.current = current;
+    // The flux from the voltage where the speed is at least a tenth of its largest: below that the
+    // resistive drop dominates u / omega.
+    const double fast = 0.1 * data.omega_e.cwiseAbs().maxCoeff();
+    double flux_squared = 0.0;
+    for (Eigen::Index k = 0; k < data.size(); ++k) {
+        const double w = data.omega_e[k];
+        if (fast > 0.0 && std::abs(w) >= fast) flux_squared = std::max(flux_squared, (data.u_d[k] * data.u_d[k] + data.u_q[k] * data.u_q[k]) / (w * w));
+    }
+    if (flux_squared > 0.0) scale.flux = std::sqrt(flux_squared);
+    return scale;
+}
+
 SteadyStateModel::SteadyStateModel(const Measurement& data, std::vector<std::unique_ptr<Effect>> effects)
     : SteadyStateModel(std::nullopt, &data, std::move(effects)) {}
 
@@ -62,10 +81,13 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
           return b;
       }) {
     if (data_.theta_e) angle_ = AngleTable::of(*data_.theta_e);
+    const OperatingScale scale = operating_scale_of(data_);
     const Bounds base = base_parameter_bounds();
     std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
+    std::vector<double> plausible_lower = lower, plausible_upper = upper;
     for (const auto& e : effects_) {
         require_columns(*e, data_);
+        e->set_scale(scale);
         for (const auto& column : e->model_columns()) {
             reads_temp_winding_ = reads_temp_winding_ || column == "temp_winding";
             reads_temp_magnet_ = reads_temp_magnet_ || column == "temp_magnet";
@@ -75,6 +97,10 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
         std::size_t real = 0;
         for (const auto& spec : e->parameter_specs()) {
             if (spec.type != ParameterType::Real) continue;
+            double lo = spec.minimum, hi = spec.maximum;
+            e->narrow_range(real, lo, hi);
+            plausible_lower.push_back(lo);
+            plausible_upper.push_back(hi);
             linear_.push_back(!sensor && e->model_linear_in(real++));
             names_.push_back(e->name() + "." + spec.name);
             lower.push_back(spec.minimum);
@@ -87,6 +113,8 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
     }
     bounds_.lower = Eigen::Map<Eigen::VectorXd>(lower.data(), static_cast<Eigen::Index>(lower.size()));
     bounds_.upper = Eigen::Map<Eigen::VectorXd>(upper.data(), static_cast<Eigen::Index>(upper.size()));
+    plausible_.lower = Eigen::Map<Eigen::VectorXd>(plausible_lower.data(), static_cast<Eigen::Index>(plausible_lower.size()));
+    plausible_.upper = Eigen::Map<Eigen::VectorXd>(plausible_upper.data(), static_cast<Eigen::Index>(plausible_upper.size()));
 }
 
 Eigen::VectorXd SteadyStateModel::parameters_of(const MotorParameters& motor) const {

@@ -21,6 +21,10 @@ namespace mhb::pmsm {
 Bounds base_parameter_bounds();
 inline const std::vector<std::string> base_parameter_names{"Rs", "Ld", "Lq", "psi_f"};
 
+// The scale of the logged currents and flux linkages (Effect::scale()): the largest current amplitude,
+// and the largest |u| / |omega| over the rows whose speed is at least a tenth of the largest.
+OperatingScale operating_scale_of(const Measurement& data);
+
 // Throws InputError when `data` lacks a column the effect's model side needs.
 void require_columns(const Effect& effect, const Measurement& data);
 
@@ -61,8 +65,13 @@ public:
     // Whether a block's state carries this temperature: only when an effect lists it (model_columns).
     bool reads_temp_winding() const { return reads_temp_winding_; }
     bool reads_temp_magnet() const { return reads_temp_magnet_; }
-    // Table 2 for the base parameters, each effect parameter's plausible range for the rest.
+    // Table 2 for the base parameters, each effect parameter's declared range for the rest: the box a
+    // fit searches.
     const Bounds& bounds() const { return bounds_; }
+    // The same, each effect parameter's range narrowed to what these data can tell apart from other
+    // effects (Effect::narrow_range): what a fitted value is judged against. Not the search box: a
+    // fit must be free to land outside it, so that the landing can be reported.
+    const Bounds& plausible() const { return plausible_; }
     // The base parameters of `motor` followed by the effects' own values: the parameters a
     // simulation with these effects was made with.
     Eigen::VectorXd parameters_of(const MotorParameters& motor) const;
@@ -114,7 +123,7 @@ private:
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
     std::vector<std::string> names_;
     std::vector<bool> linear_;  // per parameter, see linear_in
-    Bounds bounds_;
+    Bounds bounds_, plausible_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
     // Temperatures are copied into a block's state only for an effect that lists them

@@ -37,6 +37,7 @@ json diagnosis_json(const Diagnosis& d) {
     out["tie"] = d.tie;
     out["tie_experiments"] = experiments_json(d.tie_experiments);
     out["not_in_library"] = d.not_in_library;
+    out["incomplete"] = d.incomplete;
     out["recommended_model"] = d.recommended.text();
     json path = json::array();
     for (const auto& step : d.path)

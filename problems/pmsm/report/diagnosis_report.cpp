@@ -68,7 +68,7 @@ void add_summary(Document& doc, const Diagnosis& d, const DiagnosisPlots& png, c
     doc.add(Paragraph{fmt::format("**Recommended model: `{}`**{}", d.recommended.text(),
                                   d.recommended.text() == m.spec.text()
                                       ? (d.not_in_library ? " (no set of library effects reaches the noise floor with plausible values)" : " (nothing is missing)")
-                                      : "")});
+                                      : (d.incomplete ? " (and something else is missing: see the findings)" : ""))});
     add_image(doc, png.path, "residual after each step of the search");
     if (d.recommended.text() != m.spec.text() || !d.tie.empty()) {
         const std::string next = d.recommended.text() != m.spec.text() ? d.recommended.text() : m.spec.with(d.tie.front()).text();

@@ -12,7 +12,7 @@ std::string path_text(const Diagnosis& d) {
         t += fmt::format("  {:<52} {:>10.4g} {:>11} {:>9.0f}%  {}{}\n", (step.change().empty() ? "" : step.change() + " -> ") + step.fit.spec.text(),
                          step.fit.rms.total, step.change().empty() ? std::string("—") : fmt::format("{:.1f}", step.delta_bic), 100.0 * step.explained,
                          step.plausible ? "yes" : "no", step.at_noise_floor ? ", at the noise floor" : "");
-    t += fmt::format("recommended model: {}\n", d.recommended.text());
+    t += fmt::format("recommended model: {}{}\n", d.recommended.text(), d.incomplete ? " (and something else is missing)" : "");
     return t;
 }
 

@@ -1,5 +1,6 @@
 #include "problems/pmsm/report/fit_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -26,6 +27,8 @@ json parameters_json(const ModelFit& fit) {
         e["fixed"] = !fit.free[j];
         e["range"] = json::array({fit.range_lower[k], fit.range_upper[k]});
         if (fit.free[j] && j >= 4) e["at_bound"] = fit.at_bound(k);
+        if (fit.beyond_range(k)) e["beyond_range"] = true;
+        if (fit.spread_widened(k)) e["interval"] = "segment jackknife";
         p[fit.names[j]] = e;
     }
     return p;
@@ -69,9 +72,13 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
     t += fmt::format("{:<28} {:>14} {:>36}  {}\n", "parameter", "value", "95 % interval", "unit");
     for (std::size_t j = 0; j < fit.names.size(); ++j) {
         const auto k = static_cast<Eigen::Index>(j);
-        t += fmt::format("{:<28} {:>14} {:>36}  {}{}\n", fit.names[j], value_text(fit.values[k]), interval_text(fit, k), fit.units[j],
-                         fit.at_bound(k) ? "  (at a bound of its plausible range)" : "");
+        t += fmt::format("{:<28} {:>14} {:>36}  {}{}{}\n", fit.names[j], value_text(fit.values[k]), interval_text(fit, k), fit.units[j],
+                         fit.at_bound(k) ? "  (at a bound of its plausible range)" : fit.beyond_range(k) ? "  (beyond its plausible range for this log)" : "",
+                         fit.spread_widened(k) ? "  (*)" : "");
     }
+    if (std::find(fit.segment_spread.begin(), fit.segment_spread.end(), true) != fit.segment_spread.end())
+        t += "(*) interval widened to the spread over segments: the segments pull this parameter apart by more than the noise would, so "
+             "the model misses structure between them\n";
     t += fmt::format("\nresidual rms: u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n", fit.rms.d, fit.rms.q, fit.rms.total);
     if (fit.segments.size() > 1) {
         t += fmt::format("\n{:<28} {:>6} {:>11} {:>11} {:>11}\n", "segment", "rows", "u_d (V)", "u_q (V)", "total (V)");

@@ -176,7 +176,8 @@ private:
     static std::unique_ptr<FluxModel> linear_or_effect_flux(const DriveSimulation& spec) {
         std::unique_ptr<FluxModel> flux = std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
         for (const auto& e : spec.effects)
-            if (auto replacement = e->plant_flux_model(spec.motor, spec.base_directory)) flux = std::move(replacement);
+            if (auto replacement = e->plant_flux_model(spec.motor, {spec.control.current_limit, spec.motor.psi_f}, spec.base_directory))
+                flux = std::move(replacement);
         return flux;
     }
 
