@@ -440,7 +440,7 @@ TEST_CASE("each refusal of a binary file names the file, the variable and the ro
         const auto e = refusal(dir.path() / "broken.h5");
         CHECK(e.message().find("cannot read the HDF5 file") != std::string::npos);
         dir.write("broken.mat", "MATLAB 5.0 MAT-file, truncated");
-        CHECK(refusal(dir.path() / "broken.mat").message().find("cannot read the MAT file") != std::string::npos);
+        CHECK(refusal(dir.path() / "broken.mat").message() == "a MAT file cut short: 30 bytes, less than a MAT file's 128-byte header");
         dir.write("v4.mat", "MATLAB 4 something");
         CHECK(refusal(dir.path() / "v4.mat").message().find("neither v5/v7 nor v7.3") != std::string::npos);
         dir.write("other.bin", std::string("\x7f" "ELF\x02\x01\x01\0\0\0", 10));

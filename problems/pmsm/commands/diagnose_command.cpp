@@ -12,7 +12,6 @@
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/report/diagnosis_report.hpp"
-#include "problems/pmsm/data/settled_measurement.hpp"
 
 namespace mhb::cli {
 namespace {
@@ -32,7 +31,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         check_optimizer_option(o->optimizer);
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
-        auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
+        auto data = read_data_option(*o, columns);
         pmsm::DiagnosisOptions options;
         options.fit = fit_options(*o);
         const auto diagnosis = pmsm::diagnose(data, spec, options);

@@ -12,7 +12,6 @@
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/report/fit_report.hpp"
-#include "problems/pmsm/data/settled_measurement.hpp"
 
 namespace mhb::cli {
 namespace {
@@ -26,7 +25,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         check_optimizer_option(o->optimizer);
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
-        const auto data = pmsm::read_settled_measurement(o->data, o->settle, columns);
+        const auto data = read_data_option(*o, columns);
         const auto fit = pmsm::fit_model(data, spec, fit_options(*o));
         fmt::print("{}", pmsm::fit_text(fit, data));
         if (!o->json.empty()) {

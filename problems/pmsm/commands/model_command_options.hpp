@@ -1,6 +1,7 @@
 #pragma once
 // Options shared by the commands that fit a PMSM model to measurements (`fit`, `diagnose`).
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <string>
@@ -13,6 +14,7 @@
 #include "framework/registry.hpp"
 #include "problems/pmsm/data/column_map.hpp"
 #include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/data/settled_measurement.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
 
 namespace mhb::cli {
@@ -74,6 +76,15 @@ inline std::optional<tbb::global_control> thread_limit(const ModelCommandOptions
 // The column map of --columns, --columns-file and --pole-pairs, checked before any data is read.
 inline pmsm::ColumnMap column_map_option(const ModelCommandOptions& o) {
     return pmsm::column_map_from_options(o.columns, o.columns_file, o.pole_pairs);
+}
+
+// The measurement of --data under the column map, less --settle after each segment start. What the
+// reader passed over (columns or variables not used, blank lines, groups) is printed on stderr, so
+// that a column dropped by a typo or a damaged name is seen.
+inline pmsm::Measurement read_data_option(const ModelCommandOptions& o, const pmsm::ColumnMap& map) {
+    auto data = pmsm::read_settled_measurement(o.data, o.settle, map);
+    for (const auto& warning : data.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    return data;
 }
 
 // `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.

@@ -323,7 +323,8 @@ Measurement parse_measurement(const std::string& text, const std::string& source
 }
 
 Measurement read_csv_measurement(const std::filesystem::path& path, const ColumnMap& map, std::size_t block_bytes) {
-    // Directories and unreadable files are refused here, with the system's reason. The byte-order
+    require_regular_file(path, "measurement file");
+    // Unreadable files are refused here, with the system's reason. The byte-order
     // mark is recognised in the first block, so a block holds at least that.
     FileBlocks file(path, "measurement file", std::max(block_bytes, utf8_byte_order_mark.size()));
     return parse_csv(file, path.string(), map, true);

@@ -61,12 +61,17 @@ double converted(const UnitConversion& conversion, double value, const std::stri
 namespace {
 
 // The file's format by its first bytes. A MAT v7.3 file is HDF5 behind a 512-byte MATLAB header;
-// HDF5 looks for its signature at 0, 512, 1024, 2048, ... (after a user block), and so does this.
+// HDF5 looks for its signature at 0, 512, 1024, 2048, ... (after a user block), and so does this. A
+// file cut short inside a signature or a MATLAB header keeps the format it started as, so that it is
+// refused as a damaged file of that format, not parsed as CSV.
 MeasurementFormat format_of(std::ifstream& in, std::uintmax_t size) {
     char head[20] = {};
     in.read(head, sizeof head);
     const std::string_view start(head, static_cast<std::size_t>(in.gcount()));
-    if (start.starts_with("MATLAB 5.0 MAT-file")) return MeasurementFormat::Mat5;
+    // A whole file shorter than the header's first words is taken as that header cut short.
+    for (const std::string_view header : {"MATLAB 5.0 MAT-file", "MATLAB 7.3 MAT-file"})
+        if (start.starts_with(header) || (start.size() >= 6 && start.size() < header.size() && header.starts_with(start)))
+            return header[7] == '5' ? MeasurementFormat::Mat5 : MeasurementFormat::Mat73;
     constexpr std::string_view hdf5_signature("\x89HDF\r\n\x1a\n", 8);
     for (std::uintmax_t offset = 0; offset + hdf5_signature.size() <= size; offset = offset == 0 ? 512 : 2 * offset) {
         char signature[8] = {};
@@ -76,6 +81,7 @@ MeasurementFormat format_of(std::ifstream& in, std::uintmax_t size) {
         if (in.gcount() == sizeof signature && std::string_view(signature, sizeof signature) == hdf5_signature)
             return offset > 0 && start.starts_with("MATLAB") ? MeasurementFormat::Mat73 : MeasurementFormat::Hdf5;
     }
+    if (start.starts_with(hdf5_signature.substr(0, 4))) return MeasurementFormat::Hdf5;
     return start.starts_with("MATLAB") ? MeasurementFormat::OtherMat : MeasurementFormat::Csv;
 }
 
@@ -144,14 +150,17 @@ Measurement measurement_from_file_columns(FileColumns file, const ColumnMap& map
 
 MeasurementFormat measurement_format(const std::filesystem::path& path) {
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) return MeasurementFormat::Csv;
+    // Nothing but a regular file is opened: opening a FIFO would wait for a writer.
+    if (!std::filesystem::is_regular_file(path, ec)) return MeasurementFormat::Csv;
     std::ifstream in(path, std::ios::binary);
     if (!in) return MeasurementFormat::Csv;
-    const auto size = std::filesystem::is_regular_file(path, ec) ? std::filesystem::file_size(path, ec) : 0;
+    const auto size = std::filesystem::file_size(path, ec);
     return format_of(in, ec ? 0 : size);
 }
 
-Measurement read_measurement(const std::filesystem::path& path, const ColumnMap& map) {
+namespace {
+
+Measurement read_measurement_of_format(const std::filesystem::path& path, const ColumnMap& map) {
     const std::string source = path.string();
     // HDF5's thread safety covers its C library, not the C++ API read through here, and matio keeps
     // process-wide state; trials may read their data in parallel, so binary files are read one at a
@@ -160,6 +169,10 @@ Measurement read_measurement(const std::filesystem::path& path, const ColumnMap&
     switch (measurement_format(path)) {
         case MeasurementFormat::Mat5:
         case MeasurementFormat::Mat73: {
+            std::error_code ec;
+            if (const auto size = std::filesystem::file_size(path, ec); !ec && size < 128)
+                throw InputError(source, 0, "",
+                                 fmt::format("a MAT file cut short: {} bytes, less than a MAT file's 128-byte header", size));
             std::unique_lock lock(binary_reader);
             auto columns = read_mat_columns(path);
             lock.unlock();
@@ -177,6 +190,20 @@ Measurement read_measurement(const std::filesystem::path& path, const ColumnMap&
         case MeasurementFormat::Csv: break;
     }
     return read_csv_measurement(path, map);
+}
+
+}  // namespace
+
+Measurement read_measurement(const std::filesystem::path& path, const ColumnMap& map) {
+    require_regular_file(path, "measurement file");
+    try {
+        return read_measurement_of_format(path, map);
+    } catch (const std::bad_alloc&) {
+        // Every size is checked against the limits before it is allocated; what still fails is a
+        // machine with less memory than the limits allow, and the file is what to name.
+        throw InputError(path.string(), 0, "",
+                         "out of memory while reading it; a smaller file (fewer rows or variables) or a machine with more memory");
+    }
 }
 
 }  // namespace mhb::pmsm

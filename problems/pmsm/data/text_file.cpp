@@ -42,6 +42,27 @@ void FileBlocks::rewind() {
     read_ = 0;
 }
 
+void require_regular_file(const std::filesystem::path& path, const std::string& what) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (status.type() == fs::file_type::not_found)
+        throw InputError(path.string(), 0, "", "cannot open the " + what + ": No such file or directory");
+    if (ec) throw InputError(path.string(), 0, "", "cannot open the " + what + ": " + ec.message());
+    const char* kind = nullptr;
+    switch (status.type()) {
+        case fs::file_type::regular: return;
+        case fs::file_type::directory: throw InputError(path.string(), 0, "", "is a directory; expected the " + what + " file");
+        case fs::file_type::fifo: kind = "a FIFO (named pipe)"; break;
+        case fs::file_type::socket: kind = "a socket"; break;
+        case fs::file_type::character: kind = "a character device"; break;
+        case fs::file_type::block: kind = "a block device"; break;
+        default: kind = "of a kind that is neither a regular file nor a directory"; break;
+    }
+    throw InputError(path.string(), 0, "",
+                     fmt::format("is {}; the {} must be a regular file (save the data to a file and give that)", kind, what));
+}
+
 std::string read_text_file(const std::filesystem::path& path, const std::string& what, std::uintmax_t max_bytes) {
     FileBlocks file(path, what, 1 << 16, max_bytes);
     std::string text;

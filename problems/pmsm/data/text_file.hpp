@@ -33,6 +33,11 @@ private:
     std::vector<char> buffer_;
 };
 
+// mhb::InputError naming the path unless it is a regular file (after symbolic links), before anything
+// opens it: opening a FIFO waits for a writer that may never come, a device may never end, and a
+// binary reader given either would hang or read garbage. The reason names what the path is instead.
+void require_regular_file(const std::filesystem::path& path, const std::string& what);
+
 // The whole file as bytes, with FileBlocks' refusals.
 std::string read_text_file(const std::filesystem::path& path, const std::string& what,
                            std::uintmax_t max_bytes = max_text_file_bytes);
