@@ -80,10 +80,14 @@ inline pmsm::ColumnMap column_map_option(const ModelCommandOptions& o) {
 
 // The measurement of --data under the column map, less --settle after each segment start. What the
 // reader passed over (columns or variables not used, blank lines, groups) is printed on stderr, so
-// that a column dropped by a typo or a damaged name is seen.
+// that a column dropped by a typo or a damaged name is seen; a file with thousands of other
+// variables gets the first 20 and a count, not a screenful per variable.
 inline pmsm::Measurement read_data_option(const ModelCommandOptions& o, const pmsm::ColumnMap& map) {
+    constexpr std::size_t shown = 20;
     auto data = pmsm::read_settled_measurement(o.data, o.settle, map);
-    for (const auto& warning : data.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    for (std::size_t k = 0; k < data.warnings.size() && k < shown; ++k) std::fprintf(stderr, "warning: %s\n", data.warnings[k].c_str());
+    if (data.warnings.size() > shown)
+        std::fprintf(stderr, "warning: %s: %zu more warnings like these not shown\n", o.data.c_str(), data.warnings.size() - shown);
     return data;
 }
 

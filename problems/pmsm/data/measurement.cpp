@@ -58,6 +58,83 @@ double converted(const UnitConversion& conversion, double value, const std::stri
     return out;
 }
 
+std::string variable_field(const std::string& name, const std::string& column) {
+    return printable_field(column_label(name, column));
+}
+
+void DeclaredRows::check(const std::string& field, std::uint64_t rows) {
+    if (rows == 0) throw InputError(source_, 0, field, "empty: no rows");
+    if (rows > static_cast<std::uint64_t>(max_measurement_rows))
+        throw InputError(source_, 0, field, fmt::format("{} rows; the limit is {} rows", rows, max_measurement_rows));
+    if (first_.empty()) {
+        first_ = field;
+        rows_ = rows;
+    } else if (rows != rows_) {
+        throw InputError(source_, 0, field,
+                         fmt::format("{} rows, but {} has {}; every column must have one value per row", rows, first_, rows_));
+    }
+}
+
+namespace {
+
+void append_utf8(std::uint32_t code, std::string& out) {
+    if (code < 0x80) {
+        out += static_cast<char>(code);
+    } else if (code < 0x800) {
+        out += static_cast<char>(0xC0 | (code >> 6));
+        out += static_cast<char>(0x80 | (code & 0x3F));
+    } else if (code < 0x10000) {
+        out += static_cast<char>(0xE0 | (code >> 12));
+        out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
+        out += static_cast<char>(0x80 | (code & 0x3F));
+    } else {
+        out += static_cast<char>(0xF0 | (code >> 18));
+        out += static_cast<char>(0x80 | ((code >> 12) & 0x3F));
+        out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
+        out += static_cast<char>(0x80 | (code & 0x3F));
+    }
+}
+
+// The labels of a char matrix's rows, `append_row(r, text)` appending row r's characters, without
+// the blanks MATLAB pads the shorter rows with.
+template <class AppendRow>
+TextColumn labels_by_row(std::size_t rows, AppendRow append_row) {
+    TextColumn out;
+    out.rows.resize(static_cast<Eigen::Index>(rows));
+    std::string text;
+    for (std::size_t r = 0; r < rows; ++r) {
+        text.clear();
+        append_row(r, text);
+        while (!text.empty() && text.back() == ' ') text.pop_back();
+        out.rows[static_cast<Eigen::Index>(r)] = out.index_of(text);
+    }
+    return out;
+}
+
+}  // namespace
+
+TextColumn char_matrix_labels(const std::uint16_t* units, std::size_t rows, std::size_t width) {
+    return labels_by_row(rows, [&](std::size_t r, std::string& text) {
+        for (std::size_t c = 0; c < width; ++c) {
+            std::uint32_t code = units[r + rows * c];
+            if (code >= 0xD800 && code < 0xDC00 && c + 1 < width) {
+                const std::uint32_t low = units[r + rows * (c + 1)];
+                if (low >= 0xDC00 && low < 0xE000) {
+                    code = 0x10000 + ((code - 0xD800) << 10) + (low - 0xDC00);
+                    ++c;
+                }
+            }
+            append_utf8(code, text);
+        }
+    });
+}
+
+TextColumn char_matrix_labels(const std::uint8_t* bytes, std::size_t rows, std::size_t width) {
+    return labels_by_row(rows, [&](std::size_t r, std::string& text) {
+        for (std::size_t c = 0; c < width; ++c) text += static_cast<char>(bytes[r + rows * c]);
+    });
+}
+
 namespace {
 
 // The file's format by its first bytes. A MAT v7.3 file is HDF5 behind a 512-byte MATLAB header;
@@ -70,7 +147,7 @@ MeasurementFormat format_of(std::ifstream& in, std::uintmax_t size) {
     const std::string_view start(head, static_cast<std::size_t>(in.gcount()));
     // A whole file shorter than the header's first words is taken as that header cut short.
     for (const std::string_view header : {"MATLAB 5.0 MAT-file", "MATLAB 7.3 MAT-file"})
-        if (start.starts_with(header) || (start.size() >= 6 && start.size() < header.size() && header.starts_with(start)))
+        if (start.starts_with(header) || (start.size() >= 4 && start.size() < header.size() && header.starts_with(start)))
             return header[7] == '5' ? MeasurementFormat::Mat5 : MeasurementFormat::Mat73;
     constexpr std::string_view hdf5_signature("\x89HDF\r\n\x1a\n", 8);
     for (std::uintmax_t offset = 0; offset + hdf5_signature.size() <= size; offset = offset == 0 ? 512 : 2 * offset) {
@@ -85,41 +162,40 @@ MeasurementFormat format_of(std::ifstream& in, std::uintmax_t size) {
     return start.starts_with("MATLAB") ? MeasurementFormat::OtherMat : MeasurementFormat::Csv;
 }
 
+// A numeric segment label as text: an integer within int's range, as a logger writes an
+// operating-point number. Anything else (a fraction, -5.5e303) is damage, not a label.
+std::string segment_label(double value, const std::string& source, const std::string& field, std::size_t row) {
+    constexpr double least = -2147483648.0, most = 2147483647.0;
+    if (!std::isfinite(value))
+        throw InputError(source, 0, field, fmt::format("row {}: not a finite number: {}", row + 1, value));
+    if (value != std::trunc(value) || value < least || value > most)
+        throw InputError(source, 0, field,
+                         fmt::format("row {}: segment label {} is not a whole number in [{}, {}] (numeric labels number the "
+                                     "operating points; a damaged file?)",
+                                     row + 1, value, least, most));
+    return fmt::format("{}", static_cast<std::int64_t>(value));
+}
+
 Measurement measurement_from_file_columns(FileColumns file, const ColumnMap& map, const std::string& source) {
-    std::vector<std::string> names;
-    for (const auto& c : file.columns) names.push_back(c.name);
-    const auto bound = bind_columns(names, map, source, 0, "variable");
     Measurement m;
     m.source = source;
     m.warnings = std::move(file.notes);
+    for (const auto& name : file.unused)
+        m.warnings.push_back(fmt::format("{}: variable '{}' is not used by mhbench and was ignored", source, printable_field(name)));
     std::size_t rows = 0;
-    std::string first;
-    for (std::size_t k = 0; k < file.columns.size(); ++k) {
-        auto& column = file.columns[k];
-        if (bound[k].empty()) {
-            m.warnings.push_back(fmt::format("{}: variable '{}' is not used by mhbench and was ignored", source, printable_field(column.name)));
-            continue;
-        }
-        const std::string field = printable_field(column_label(column.name, bound[k]));
-        if (!column.unusable.empty()) throw InputError(source, 0, field, column.unusable);
+    for (auto& column : file.columns) {
+        const std::string field = variable_field(column.name, column.column);
         const std::size_t n = static_cast<std::size_t>(column.labels ? column.labels->rows.size() : column.numbers.size());
-        if (n == 0) throw InputError(source, 0, field, "empty: no rows");
-        if (first.empty()) {
-            rows = n;
-            first = field;
-        } else if (n != rows) {
-            throw InputError(source, 0, field, fmt::format("{} rows, but {} has {}; every column must have one value per row", n, first, rows));
-        }
+        // The readers checked what each variable declared; this checks what they read.
+        if (rows == 0) rows = n;
+        if (n == 0 || n != rows) throw InputError(source, 0, field, fmt::format("{} rows read where {} were declared", n, rows));
         auto row = [](std::size_t r) { return fmt::format("row {}: ", r + 1); };
-        if (bound[k] == "segment") {
+        if (column.column == "segment") {
             if (!column.labels) {
                 TextColumn& text = column.labels.emplace();
                 text.rows.resize(column.numbers.size());
-                for (Eigen::Index r = 0; r < column.numbers.size(); ++r) {
-                    if (!std::isfinite(column.numbers[r]))
-                        throw InputError(source, 0, field, fmt::format("{}not a finite number: {}", row(static_cast<std::size_t>(r)), column.numbers[r]));
-                    text.rows[r] = text.index_of(fmt::format("{}", column.numbers[r]));
-                }
+                for (Eigen::Index r = 0; r < column.numbers.size(); ++r)
+                    text.rows[r] = text.index_of(segment_label(column.numbers[r], source, field, static_cast<std::size_t>(r)));
                 column.numbers = Eigen::VectorXd();
             }
             TextColumn& text = *column.labels;
@@ -134,14 +210,14 @@ Measurement measurement_from_file_columns(FileColumns file, const ColumnMap& map
             continue;
         }
         if (column.labels) throw InputError(source, 0, field, "holds text; mhbench reads numbers here (only segment may be text)");
-        const auto conversion = unit_conversion(map, bound[k]);
+        const auto conversion = unit_conversion(map, column.column);
         for (std::size_t r = 0; r < n; ++r) {
             double& value = column.numbers[static_cast<Eigen::Index>(r)];
             if (!std::isfinite(value)) throw InputError(source, 0, field, fmt::format("{}not a finite number: {}", row(r), value));
             value = converted(conversion, value, source, 0, field, row(r));
         }
         // Moved, not copied: the column's memory becomes the measurement's.
-        *numeric_column(m, bound[k]) = std::move(column.numbers);
+        *numeric_column(m, column.column) = std::move(column.numbers);
     }
     return m;
 }
@@ -162,25 +238,21 @@ namespace {
 
 Measurement read_measurement_of_format(const std::filesystem::path& path, const ColumnMap& map) {
     const std::string source = path.string();
-    // HDF5's thread safety covers its C library, not the C++ API read through here, and matio keeps
-    // process-wide state; trials may read their data in parallel, so binary files are read one at a
-    // time, which costs little next to a fit.
+    // Debian's HDF5 is built without thread safety; trials may read their data in parallel, so
+    // binary files are read one at a time, which costs little next to a fit.
     static std::mutex binary_reader;
-    switch (measurement_format(path)) {
+    const MeasurementFormat format = measurement_format(path);
+    switch (format) {
         case MeasurementFormat::Mat5:
-        case MeasurementFormat::Mat73: {
-            std::error_code ec;
-            if (const auto size = std::filesystem::file_size(path, ec); !ec && size < 128)
-                throw InputError(source, 0, "",
-                                 fmt::format("a MAT file cut short: {} bytes, less than a MAT file's 128-byte header", size));
-            std::unique_lock lock(binary_reader);
-            auto columns = read_mat_columns(path);
-            lock.unlock();
-            return measurement_from_file_columns(std::move(columns), map, source);
-        }
+        case MeasurementFormat::Mat73:
         case MeasurementFormat::Hdf5: {
+            const ColumnChoice choose = [&](const std::vector<std::string>& names) {
+                return bind_columns(names, map, source, 0, "variable");
+            };
             std::unique_lock lock(binary_reader);
-            auto columns = read_hdf5_columns(path);
+            auto columns = format == MeasurementFormat::Mat5    ? read_mat5_columns(path, choose)
+                           : format == MeasurementFormat::Mat73 ? read_hdf5_columns(path, choose, Hdf5Layout::matlab)
+                                                                : read_hdf5_columns(path, choose, Hdf5Layout::plain);
             lock.unlock();
             return measurement_from_file_columns(std::move(columns), map, source);
         }

@@ -1,6 +1,10 @@
 #pragma once
 // The variables of a binary measurement file (MAT, HDF5) as the format readers hand them to the
 // measurement reader, which maps them onto mhbench's columns (problems/pmsm/data/measurement.cpp).
+// A reader first lists every name the file holds, in one pass over the file's index, asks which of
+// them feed mhbench's columns, checks what those declare (class, shape, rows, sizes) against the
+// limits and the file's real size, and only then reads their data. Nothing else is read.
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -31,27 +35,60 @@ struct TextColumn {
     }
 };
 
+// For each name a file holds (in the file's order), the mhbench column it feeds, or "" for none:
+// bind_columns under the user's column map, with its refusals of missing names.
+using ColumnChoice = std::function<std::vector<std::string>(const std::vector<std::string>& names)>;
+
 struct FileColumn {
-    std::string name;
+    std::string name;    // the variable's name in the file (a struct's field, a group's dataset)
+    std::string column;  // the mhbench column it feeds
     Eigen::VectorXd numbers;  // Eigen's, so that the measurement takes it over without a copy
     std::optional<TextColumn> labels;  // text (a cell array of strings, a char matrix, a string dataset)
-    // Why the variable cannot be a column (e.g. "a 3x4 matrix"); empty when it can. Refused only when
-    // the variable is used, so that a file may carry other data beside the log.
-    std::string unusable;
 };
 
 struct FileColumns {
-    std::vector<FileColumn> columns;
-    std::vector<std::string> notes;  // what the reader passed over (other structs, groups), as warnings
+    std::vector<FileColumn> columns;  // the variables that feed a column, read, in the file's order
+    std::vector<std::string> unused;  // the names of the others, never read
+    std::vector<std::string> notes;   // what the reader passed over besides (other structs, groups, links)
 };
 
-// A MAT file, v5 (with v7's compression) or v7.3, through matio. The columns are the top-level
-// variables; when the file holds one struct and nothing else, that struct's fields.
-FileColumns read_mat_columns(const std::filesystem::path& path);
+// The longest label a segment column may hold, in bytes: a label names an operating point, and a
+// longer one is damage (a length field gone wrong), not a name.
+inline constexpr std::size_t max_label_bytes = 4096;
+// The most variables (datasets, links) a binary file may list; a log has tens.
+inline constexpr std::size_t max_file_variables = 1'000'000;
 
-// An HDF5 file through the HDF5 C++ API. The columns are the datasets at the root; when the root
-// holds no dataset and exactly one group, that group's datasets.
-FileColumns read_hdf5_columns(const std::filesystem::path& path);
+// The message field for a variable: "Id_meas (i_d)" when the file's name differs from the column's.
+std::string variable_field(const std::string& name, const std::string& column);
+
+// The row count every used variable must declare, checked before any of its data is read: at least
+// one, at most max_measurement_rows, the same for all. Refusals name the file and the variable.
+class DeclaredRows {
+public:
+    explicit DeclaredRows(std::string source) : source_(std::move(source)) {}
+    void check(const std::string& field, std::uint64_t rows);
+
+private:
+    std::string source_, first_;
+    std::uint64_t rows_ = 0;
+};
+
+// The rows of a MATLAB char matrix, stored column-major (`rows` × `width` characters), as UTF-8
+// labels without the blanks MATLAB pads short rows with: 16-bit units are UTF-16, 8-bit ones bytes.
+TextColumn char_matrix_labels(const std::uint16_t* units, std::size_t rows, std::size_t width);
+TextColumn char_matrix_labels(const std::uint8_t* bytes, std::size_t rows, std::size_t width);
+
+// A MAT v5 file (with v7's compression) through mhbench's own parser (mat_file_reader.cpp). The
+// columns are the top-level variables; when the file holds one struct and nothing else, its fields.
+FileColumns read_mat5_columns(const std::filesystem::path& path, const ColumnChoice& choose);
+
+// How an HDF5 file's datasets are read: as HDF5 (numbers, strings), or as a MAT v7.3 file, which
+// is HDF5 with MATLAB's classes in attributes (char as UTF-16, cell arrays as references).
+enum class Hdf5Layout { plain, matlab };
+
+// An HDF5 or MAT v7.3 file through the HDF5 C library. The columns are the datasets at the root;
+// when the root holds no dataset and exactly one group, that group's datasets.
+FileColumns read_hdf5_columns(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout);
 
 // Shared by the CSV reader, the CSV writer and the mapping of binary files' columns (measurement.cpp).
 // A CSV field as the reader takes it: without surrounding blanks, a quoted field as its content.
