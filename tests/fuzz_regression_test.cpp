@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tests/fuzz/input_formats.hpp"
+#include "tests/measurement_file_writers.hpp"
 
 namespace fs = std::filesystem;
 using mhb::fuzz::Verdict;
@@ -15,6 +16,8 @@ using mhb::fuzz::Verdict;
 namespace {
 
 const fs::path regressions_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "regressions";
+// Valid files of every documented binary layout, which the binary fuzzers start from.
+const fs::path seeds_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "seeds";
 
 std::string file_bytes(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
@@ -71,4 +74,67 @@ TEST_CASE("the bad inputs named in issue 12 are refused, not accepted", "[fuzz]"
 
 TEST_CASE("an experiment whose lists multiply into 10^8 variants is refused before they are expanded", "[fuzz]") {
     CHECK(verdict_on("experiment", "grid_of_10_pow_8_variants.toml") == Verdict::refused);
+}
+
+TEST_CASE("every binary fuzzer seed, a valid file of a documented layout, is accepted", "[fuzz]") {
+    std::size_t accepted = 0;
+    for (const std::string format : {"mat5", "mat73", "hdf5"}) {
+        const auto files = files_in(seeds_directory / format);
+        CHECK(files.size() >= 3);
+        for (const auto& file : files) {
+            INFO(file.string());
+            CHECK(mhb::fuzz::accept_or_refuse(mhb::fuzz::input_format(format), file_bytes(file)) == Verdict::accepted);
+            ++accepted;
+        }
+    }
+    CHECK(accepted >= 9);
+}
+
+// Run by hand (`mhbench_tests "[.write_fuzz_seeds]"`) to write the seeds again into the source tree.
+TEST_CASE("write the binary fuzzers' seeds", "[.write_fuzz_seeds]") {
+    using mhb::testing::WrittenColumn;
+    const std::vector<double> t{0, 1e-3, 2e-3, 3e-3, 4e-3, 5e-3}, i{0.5, 0.25, -1, 2, 1e-3, 3}, u{12, 11.5, -3, 4, 0, 7.25};
+    const std::vector<double> numbers_segment{1, 1, 2, 2, 2, 3};
+    const std::vector<std::string> text_segment{"id0", "id0", "id-1", "id-1", "\xC2\xB5", "id0"};
+    auto log = [&](bool text) {
+        return std::vector<WrittenColumn>{{"t", t, {}},   {"segment", text ? std::vector<double>{} : numbers_segment, text ? text_segment : std::vector<std::string>{}},
+                                          {"i_d", i, {}}, {"i_q", i, {}}, {"u_d", u, {}}, {"u_q", u, {}}, {"omega_e", u, {}}};
+    };
+    for (const std::string format : {"mat5", "mat73", "hdf5"}) fs::create_directories(seeds_directory / format);
+    mhb::testing::write_mat(seeds_directory / "mat5" / "v5_numbers.mat", MAT_FT_MAT5, log(false));
+    mhb::testing::write_mat(seeds_directory / "mat5" / "v7_cell_segment.mat", MAT_FT_MAT5, log(true), "", MAT_COMPRESSION_ZLIB);
+    mhb::testing::write_mat(seeds_directory / "mat5" / "v7_struct.mat", MAT_FT_MAT5, log(true), "log", MAT_COMPRESSION_ZLIB);
+    mhb::testing::write_mat(seeds_directory / "mat5" / "v5_struct_cell_segment.mat", MAT_FT_MAT5, log(true), "log");
+    mhb::testing::write_mat(seeds_directory / "mat73" / "v73_cell_segment.mat", MAT_FT_MAT73, log(true));
+    mhb::testing::write_mat(seeds_directory / "mat73" / "v73_numbers.mat", MAT_FT_MAT73, log(false));
+    mhb::testing::write_mat(seeds_directory / "mat73" / "v73_struct.mat", MAT_FT_MAT73, log(true), "log");
+    // A char matrix of labels (rows "ab", "ab", "c", ...), as char(labels) saves them.
+    for (const auto& [format, version] : {std::pair{"mat5", MAT_FT_MAT5}, std::pair{"mat73", MAT_FT_MAT73}}) {
+        const auto path = seeds_directory / format / (std::string(format == std::string("mat5") ? "v5" : "v73") + "_char_matrix_segment.mat");
+        mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, version);
+        const char labels[] = {'a', 'a', 'c', 'c', 'c', 'a', 'b', 'b', ' ', ' ', ' ', 'b'};
+        std::size_t dims[2] = {6, 2};
+        matvar_t* v = Mat_VarCreate("segment", MAT_C_CHAR, MAT_T_UTF8, 2, dims, const_cast<char*>(labels), 0);
+        Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+        Mat_VarFree(v);
+        for (const auto& c : log(false))
+            if (c.name != "segment") {
+                v = mhb::testing::mat_variable(c, true);
+                Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+                Mat_VarFree(v);
+            }
+        Mat_Close(mat);
+    }
+    mhb::testing::write_hdf5(seeds_directory / "hdf5" / "root_datasets.h5", log(true));
+    mhb::testing::write_hdf5(seeds_directory / "hdf5" / "one_group.h5", log(false), "bench");
+    {
+        H5::H5File file((seeds_directory / "hdf5" / "fixed_utf8_strings_int16.h5").string(), H5F_ACC_TRUNC);
+        const hsize_t dims[2] = {6, 1};
+        H5::StrType fixed(H5::PredType::C_S1, 4);
+        fixed.setCset(H5T_CSET_UTF8);
+        file.createDataSet("segment", fixed, H5::DataSpace(2, dims)).write("id0\0id0\0id1\0id1\0\xC2\xB5\0\0id0\0", fixed);
+        const short counts[6] = {1, 2, 3, 4, 5, -6};
+        for (const char* name : {"i_d", "i_q", "u_d", "u_q", "omega_e"})
+            file.createDataSet(name, H5::PredType::STD_I16LE, H5::DataSpace(2, dims)).write(counts, H5::PredType::NATIVE_SHORT);
+    }
 }

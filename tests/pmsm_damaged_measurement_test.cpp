@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -83,6 +84,46 @@ std::vector<std::pair<std::size_t, std::size_t>> mat5_elements(const std::string
         at += 8 + n;
     }
     return out;
+}
+
+// The valid files the damaged ones are made from: every layout, with numeric and text segments.
+struct ValidSource {
+    std::string name;
+    bool compressed_mat5;
+    std::function<void(const fs::path&)> write;
+};
+
+std::vector<ValidSource> valid_sources() {
+    using mhb::testing::write_hdf5;
+    using mhb::testing::write_mat;
+    return {
+        {"v5_numeric_segment.mat", false, [](const fs::path& p) { write_mat(p, MAT_FT_MAT5, log_columns(true)); }},
+        {"v7_text_segment.mat", true, [](const fs::path& p) { write_mat(p, MAT_FT_MAT5, log_columns(false), "", MAT_COMPRESSION_ZLIB); }},
+        {"v7_numeric_segment.mat", true, [](const fs::path& p) { write_mat(p, MAT_FT_MAT5, log_columns(true), "", MAT_COMPRESSION_ZLIB); }},
+        {"v7_struct.mat", true, [](const fs::path& p) { write_mat(p, MAT_FT_MAT5, log_columns(false), "log", MAT_COMPRESSION_ZLIB); }},
+        {"v73.mat", false, [](const fs::path& p) { write_mat(p, MAT_FT_MAT73, log_columns(false)); }},
+        {"log.h5", false, [](const fs::path& p) { write_hdf5(p, log_columns(false)); }},
+    };
+}
+
+// A `segment` dataset of UTF-8 strings, as h5py writes them: variable length, or fixed at the
+// longest label's length and padded with NULs.
+void write_utf8_segment(H5::Group& group, const std::vector<std::string>& labels, bool variable) {
+    const hsize_t dims[1] = {labels.size()};
+    std::size_t width = 1;
+    for (const auto& l : labels) width = std::max(width, l.size());
+    H5::StrType text(H5::PredType::C_S1, variable ? H5T_VARIABLE : width);
+    text.setCset(H5T_CSET_UTF8);
+    auto dataset = group.createDataSet("segment", text, H5::DataSpace(1, dims));
+    if (variable) {
+        std::vector<const char*> pointers;
+        for (const auto& l : labels) pointers.push_back(l.c_str());
+        dataset.write(pointers.data(), text);
+    } else {
+        std::string fixed;
+        for (const auto& l : labels) fixed += l + std::string(width - l.size(), '\0');
+        dataset.write(fixed.data(), text);
+    }
 }
 
 // What reading a damaged file gave: refused naming it, or read.
@@ -191,21 +232,7 @@ TEST_CASE("fit and diagnose print the reader's warnings, a CSV column not used a
 TEST_CASE("damaged MAT and HDF5 files are refused naming the file or read exactly as the valid one, never a wrong answer",
           "[pmsm][measurement][damaged]") {
     mhb::testing::TemporaryDirectory dir;
-    struct Source {
-        std::string name;
-        bool compressed_mat5;
-        std::function<void(const fs::path&)> write;
-    };
-    const std::vector<Source> sources{
-        {"v5_numeric_segment.mat", false, [](const fs::path& p) { mhb::testing::write_mat(p, MAT_FT_MAT5, log_columns(true)); }},
-        {"v7_text_segment.mat", true,
-         [](const fs::path& p) { mhb::testing::write_mat(p, MAT_FT_MAT5, log_columns(false), "", MAT_COMPRESSION_ZLIB); }},
-        {"v7_numeric_segment.mat", true,
-         [](const fs::path& p) { mhb::testing::write_mat(p, MAT_FT_MAT5, log_columns(true), "", MAT_COMPRESSION_ZLIB); }},
-        {"v7_struct.mat", true, [](const fs::path& p) { mhb::testing::write_mat(p, MAT_FT_MAT5, log_columns(false), "log", MAT_COMPRESSION_ZLIB); }},
-        {"v73.mat", false, [](const fs::path& p) { mhb::testing::write_mat(p, MAT_FT_MAT73, log_columns(false)); }},
-        {"log.h5", false, [](const fs::path& p) { mhb::testing::write_hdf5(p, log_columns(false)); }},
-    };
+    const auto sources = valid_sources();
     std::size_t refused = 0, read_same = 0;
     for (const auto& source : sources) {
         const auto valid_path = dir.path() / source.name;
@@ -377,23 +404,11 @@ TEST_CASE("declared sizes are checked before anything is allocated or read", "[p
 TEST_CASE("HDF5 string segments in UTF-8 (h5py's default), variable and fixed length, read as text", "[pmsm][measurement][damaged]") {
     mhb::testing::TemporaryDirectory dir;
     const auto path = dir.path() / "utf8.h5";
-    const std::vector<std::string> labels{"id0", "id0", "\xC2\xB5A_\xE2\x86\x92", "id0"};
+    const std::vector<std::string> labels{"id0", "id0", "\xC2\xB5" "A_\xE2\x86\x92", "id0"};
     for (const bool variable : {true, false}) {
         {
             H5::H5File file(path.string(), H5F_ACC_TRUNC);
-            const hsize_t dims[1] = {labels.size()};
-            H5::StrType text(H5::PredType::C_S1, variable ? H5T_VARIABLE : 8);
-            text.setCset(H5T_CSET_UTF8);
-            auto dataset = file.createDataSet("segment", text, H5::DataSpace(1, dims));
-            if (variable) {
-                std::vector<const char*> pointers;
-                for (const auto& l : labels) pointers.push_back(l.c_str());
-                dataset.write(pointers.data(), text);
-            } else {
-                std::string fixed;
-                for (const auto& l : labels) fixed += l + std::string(8 - l.size(), '\0');
-                dataset.write(fixed.data(), text);
-            }
+            write_utf8_segment(file, labels, variable);
             const std::vector<double> ones(labels.size(), 1.0);
             for (const char* name : {"i_d", "i_q", "u_d", "u_q", "omega_e"})
                 mhb::testing::write_hdf5_column(file, {name, ones, {}});
@@ -459,5 +474,112 @@ TEST_CASE("thousands of unused variables are listed in one pass and read in well
         CHECK(m.warnings.size() == extra);
         // Quadratic listing took 60 s for a v5 file like this one; linear takes tens of milliseconds.
         CHECK(seconds < 10.0);
+    }
+}
+
+// Run by hand, `MHBENCH_DAMAGED_CORPUS=DIR mhbench_tests "[.write_damaged_corpus]"`: the damaged
+// files of the tests above in DIR, and DIR/manifest.tsv giving each file's class, the valid file it
+// was made from and the --columns it is read with. tests/damaged_files/count_outcomes.py runs
+// `mhbench fit` on each and counts the outcomes per class (docs/data-format.md, "Damaged files").
+TEST_CASE("write the damaged-file corpus", "[.write_damaged_corpus]") {
+    const char* target = std::getenv("MHBENCH_DAMAGED_CORPUS");
+    REQUIRE(target);
+    const fs::path dir(target);
+    fs::create_directories(dir);
+    std::ofstream manifest(dir / "manifest.tsv");
+    auto entry = [&](const std::string& file, const std::string& kind, const std::string& source, const std::string& columns = "") {
+        manifest << file << '\t' << kind << '\t' << source << '\t' << columns << '\n';
+    };
+    for (const auto& source : valid_sources()) {
+        source.write(dir / source.name);
+        entry(source.name, "valid", source.name);
+        const std::string bytes = bytes_of(dir / source.name);
+        for (const auto& [what, damaged] : damaged_copies(bytes, source.compressed_mat5)) {
+            write_bytes(dir / (what + "_" + source.name), damaged);
+            entry(what + "_" + source.name, what.starts_with("cut") ? "cut short" : "compressed byte flipped", source.name);
+        }
+        // A byte flipped in the exponent of a raw (uncompressed) double: no checksum covers it.
+        if (!source.compressed_mat5) {
+            const double value = valid_log().i_q[200];
+            const auto at = bytes.find(std::string(reinterpret_cast<const char*>(&value), sizeof value));
+            REQUIRE(at != std::string::npos);
+            std::string copy = bytes;
+            copy[at + 7] = static_cast<char>(copy[at + 7] ^ 0x10);
+            write_bytes(dir / ("raw_flip_" + source.name), copy);
+            entry("raw_flip_" + source.name, "raw number byte flipped", source.name);
+        }
+    }
+    auto columns = log_columns(true);
+    for (const double label : {-5.5e303, 2.5}) {
+        columns[1].numbers[399] = label;
+        const std::string name = "label_" + std::to_string(label).substr(0, 4) + ".mat";
+        mhb::testing::write_mat(dir / name, MAT_FT_MAT5, columns);
+        entry(name, "segment label not a whole number", "v5_numeric_segment.mat");
+    }
+    columns = log_columns(true);
+    columns[4].numbers[16] = std::numeric_limits<double>::infinity();
+    mhb::testing::write_mat(dir / "inf_i_q.mat", MAT_FT_MAT73, columns);
+    entry("inf_i_q.mat", "value not finite", "v73.mat");
+    columns[4].numbers[16] = std::nan("");
+    mhb::testing::write_hdf5(dir / "nan_i_q.h5", columns);
+    entry("nan_i_q.h5", "value not finite", "log.h5");
+    for (const auto& source : {std::string("v5_numeric_segment.mat"), std::string("v73.mat"), std::string("log.h5")}) {
+        std::string bytes = bytes_of(dir / source);
+        bytes[bytes.find("segment") + 5] = '~';
+        write_bytes(dir / ("renamed_segment_" + source), bytes);
+        entry("renamed_segment_" + source, "segment name damaged", source);
+    }
+    REQUIRE(mkfifo((dir / "fifo.mat").c_str(), 0600) == 0);
+    entry("fifo.mat", "FIFO", "");
+    {
+        H5::H5File file((dir / "external_link_to_fifo.h5").string(), H5F_ACC_TRUNC);
+        for (const auto& c : log_columns(false)) mhb::testing::write_hdf5_column(file, c);
+        REQUIRE(H5Lcreate_external((dir / "fifo.mat").c_str(), "/x", file.getId(), "elsewhere", H5P_DEFAULT, H5P_DEFAULT) >= 0);
+    }
+    entry("external_link_to_fifo.h5", "external link to a FIFO", "log.h5");
+    for (const std::size_t extra : {std::size_t{4000}, std::size_t{20'000}}) {
+        auto many = log_columns(false);
+        for (std::size_t k = 0; k < extra; ++k) many.push_back({"unused_" + std::to_string(k), {1.0, 2.0}, {}});
+        const std::string n = std::to_string(extra);
+        mhb::testing::write_mat(dir / ("many_" + n + "_v7.mat"), MAT_FT_MAT5, many, "", MAT_COMPRESSION_ZLIB);
+        mhb::testing::write_mat(dir / ("many_" + n + "_v73.mat"), MAT_FT_MAT73, many);
+        mhb::testing::write_hdf5(dir / ("many_" + n + ".h5"), many);
+        entry("many_" + n + "_v7.mat", n + " unused variables", "v7_text_segment.mat");
+        entry("many_" + n + "_v73.mat", n + " unused variables", "v73.mat");
+        entry("many_" + n + ".h5", n + " unused variables", "log.h5");
+    }
+    {
+        H5::H5File file((dir / "unused_1GB_strings.h5").string(), H5F_ACC_TRUNC);
+        for (const auto& c : log_columns(false)) mhb::testing::write_hdf5_column(file, c);
+        const hsize_t dims[1] = {3};
+        const H5::StrType wide(H5::PredType::C_S1, std::size_t{1} << 30);
+        // Declared, never written (chunked storage allocates nothing): 3 GB in a file of a few kB.
+        H5::DSetCreatPropList creation;
+        const hsize_t chunk[1] = {1};
+        creation.setChunk(1, chunk);
+        file.createDataSet("notes", wide, H5::DataSpace(1, dims), creation);
+    }
+    entry("unused_1GB_strings.h5", "unused dataset declaring 3 GB", "log.h5");
+    {
+        const auto path = dir / "unwritten_2_pow_28.mat";
+        mhb::testing::write_mat(path, MAT_FT_MAT73, log_columns(false));
+        H5::H5File file(path.string(), H5F_ACC_RDWR);
+        const hsize_t dims[2] = {hsize_t{1} << 28, 1};
+        H5::DSetCreatPropList creation;
+        const hsize_t chunk[2] = {4096, 1};
+        creation.setChunk(2, chunk);
+        auto dataset = file.createDataSet("big", H5::PredType::IEEE_F64LE, H5::DataSpace(2, dims), creation);
+        const H5::StrType name(H5::PredType::C_S1, 6);
+        dataset.createAttribute("MATLAB_class", name, H5::DataSpace()).write(name, "double");
+    }
+    entry("unwritten_2_pow_28.mat", "variable declaring 2^28 rows never written", "v73.mat", "i_q=big");
+    entry("unwritten_2_pow_28.mat", "unused variable declaring 2^28 rows never written", "v73.mat");
+    for (const bool variable : {true, false}) {
+        const std::string name = std::string("utf8_") + (variable ? "variable" : "fixed") + ".h5";
+        H5::H5File file((dir / name).string(), H5F_ACC_TRUNC);
+        for (const auto& c : log_columns(false))
+            if (c.name != "segment") mhb::testing::write_hdf5_column(file, c);
+        write_utf8_segment(file, log_columns(false)[1].labels, variable);
+        entry(name, "UTF-8 segment strings", "log.h5");
     }
 }

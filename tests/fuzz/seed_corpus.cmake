@@ -1,6 +1,6 @@
 # Builds the fuzzers' starting corpora in the build tree, fuzz/corpus/<format>/, from inputs the
 # repository already has: experiment configs, simulation profiles, the paper's measurement, the flux
-# map in experiments/pmsm/data, model specs the docs use, and every regression
+# map in experiments/pmsm/data, model specs the docs use, the binary seeds, and every regression
 # file. Nothing is copied into the source tree. Large files are cut to their first lines: libFuzzer
 # sizes its inputs after the largest seed, and a 130 kB seed would slow every execution for little.
 
@@ -39,6 +39,18 @@ foreach(format experiment simulation_profile measurement flux_map model_spec)
   file(GLOB regressions CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/fuzz/regressions/${format}/*)
   foreach(file IN LISTS ${format}_seeds regressions)
     mhbench_add_seed(${format} ${file})
+  endforeach()
+endforeach()
+
+# The binary formats start from the valid files of every documented layout in tests/fuzz/seeds/
+# (written by the hidden test "[.write_fuzz_seeds]" in tests/fuzz_regression_test.cpp), copied
+# whole: cutting a binary file at a line would damage it.
+foreach(format mat5 mat73 hdf5)
+  file(MAKE_DIRECTORY ${CMAKE_BINARY_DIR}/fuzz/corpus/${format})
+  file(GLOB binary_seeds CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/fuzz/seeds/${format}/*
+       ${PROJECT_SOURCE_DIR}/tests/fuzz/regressions/${format}/*)
+  foreach(file IN LISTS binary_seeds)
+    file(COPY ${file} DESTINATION ${CMAKE_BINARY_DIR}/fuzz/corpus/${format})
   endforeach()
 endforeach()
 

@@ -9,6 +9,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 #include <utility>
 
@@ -234,28 +235,30 @@ MeasurementFormat measurement_format(const std::filesystem::path& path) {
     return format_of(in, ec ? 0 : size);
 }
 
+Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map) {
+    const std::string source = path.string();
+    const ColumnChoice choose = [&](const std::vector<std::string>& names) { return bind_columns(names, map, source, 0, "variable"); };
+    // Debian's HDF5 is built without thread safety; trials may read their data in parallel, so
+    // binary files are read one at a time, which costs little next to a fit.
+    static std::mutex binary_reader;
+    std::unique_lock lock(binary_reader);
+    auto columns = format == MeasurementFormat::Mat5    ? read_mat5_columns(path, choose)
+                   : format == MeasurementFormat::Mat73 ? read_hdf5_columns(path, choose, Hdf5Layout::matlab)
+                   : format == MeasurementFormat::Hdf5  ? read_hdf5_columns(path, choose, Hdf5Layout::plain)
+                                                        : throw std::invalid_argument("read_binary_measurement: not a binary format");
+    lock.unlock();
+    return measurement_from_file_columns(std::move(columns), map, source);
+}
+
 namespace {
 
 Measurement read_measurement_of_format(const std::filesystem::path& path, const ColumnMap& map) {
     const std::string source = path.string();
-    // Debian's HDF5 is built without thread safety; trials may read their data in parallel, so
-    // binary files are read one at a time, which costs little next to a fit.
-    static std::mutex binary_reader;
     const MeasurementFormat format = measurement_format(path);
     switch (format) {
         case MeasurementFormat::Mat5:
         case MeasurementFormat::Mat73:
-        case MeasurementFormat::Hdf5: {
-            const ColumnChoice choose = [&](const std::vector<std::string>& names) {
-                return bind_columns(names, map, source, 0, "variable");
-            };
-            std::unique_lock lock(binary_reader);
-            auto columns = format == MeasurementFormat::Mat5    ? read_mat5_columns(path, choose)
-                           : format == MeasurementFormat::Mat73 ? read_hdf5_columns(path, choose, Hdf5Layout::matlab)
-                                                                : read_hdf5_columns(path, choose, Hdf5Layout::plain);
-            lock.unlock();
-            return measurement_from_file_columns(std::move(columns), map, source);
-        }
+        case MeasurementFormat::Hdf5: return read_binary_measurement(path, format, map);
         case MeasurementFormat::OtherMat:
             throw InputError(source, 0, "",
                              "a MATLAB file that is neither v5/v7 nor v7.3; save it with save(file, '-v7') or '-v7.3'");

@@ -15,6 +15,9 @@
 
 #include <Eigen/Core>
 
+#include "problems/pmsm/data/column_map.hpp"
+#include "problems/pmsm/data/measurement.hpp"
+
 namespace mhb::pmsm {
 
 // A column of text with each distinct text held once: a segment column repeats a few labels over a
@@ -90,11 +93,13 @@ enum class Hdf5Layout { plain, matlab };
 // when the root holds no dataset and exactly one group, that group's datasets.
 FileColumns read_hdf5_columns(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout);
 
+// read_measurement for a file taken as `format` (Mat5, Mat73 or Hdf5) whatever its first bytes; the
+// fuzzers drive each reader through it.
+Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map = {});
+
 // Shared by the CSV reader, the CSV writer and the mapping of binary files' columns (measurement.cpp).
 // A CSV field as the reader takes it: without surrounding blanks, a quoted field as its content.
 std::string_view csv_field_text(std::string_view s);
-struct Measurement;
-class UnitConversion;
 // The vector that holds mhbench's numeric column `name` in `m`, created for an optional column.
 Eigen::VectorXd* numeric_column(Measurement& m, const std::string& name);
 // A value converted to mhbench's unit, refused when the conversion leaves the range of a double.
