@@ -433,10 +433,24 @@ TEST_CASE("HDF5 links and storage outside the file are never followed", "[pmsm][
         // Into a FIFO that no one writes: following it would wait for ever.
         REQUIRE(H5Lcreate_external(fifo.c_str(), "/temp_magnet", file.getId(), "magnet", H5P_DEFAULT, H5P_DEFAULT) >= 0);
     }
+    {
+        // A soft link to the external link: following the soft link must not follow the external one.
+        H5::H5File file(path.string(), H5F_ACC_RDWR);
+        REQUIRE(H5Lcreate_soft("/magnet", file.getId(), "magnet_again", H5P_DEFAULT, H5P_DEFAULT) >= 0);
+    }
     const auto m = read_measurement(path);
     CHECK_FALSE(m.temp_magnet);
     CHECK(std::find(m.warnings.begin(), m.warnings.end(),
                     path.string() + ": 'magnet' is an external link into another file and was not followed") != m.warnings.end());
+    CHECK(std::find(m.warnings.begin(), m.warnings.end(),
+                    path.string() + ": 'magnet_again' is neither a dataset nor a group and was ignored") != m.warnings.end());
+    try {
+        read_measurement(path, parse_column_map("temp_magnet=magnet_again", "command line", "--columns"));
+        FAIL("accepted");
+    } catch (const InputError& e) {
+        // Not a variable: the soft link leads nowhere the reader may go.
+        CHECK_THAT(e.message(), Catch::StartsWith("no such variable (mapped to temp_magnet by --columns)"));
+    }
     try {
         read_measurement(path, parse_column_map("temp_magnet=magnet", "command line", "--columns"));
         FAIL("accepted");

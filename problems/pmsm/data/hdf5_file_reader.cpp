@@ -85,6 +85,9 @@ const char* class_name(H5T_class_t c) {
     }
 }
 
+// The most characters a v7.3 char matrix of labels may hold: 5 million labels of 50 characters.
+constexpr hsize_t max_char_matrix_units = hsize_t{1} << 28;
+
 std::string shape(const std::vector<hsize_t>& dims) {
     if (dims.empty()) return "scalar";
     std::string out;
@@ -96,10 +99,23 @@ bool is_vector(const std::vector<hsize_t>& dims) {
     return dims.size() == 1 || (dims.size() == 2 && (dims[0] == 1 || dims[1] == 1));
 }
 
+// Called where a path would leave the file through an external link: the traversal fails. Without
+// it, a soft link to an external link would be followed into any file, a FIFO included.
+herr_t refuse_external_link(const char*, const char*, const char*, const char*, unsigned*, hid_t, void*) { return -1; }
+
+// Access properties for `kind` (links, datasets, groups) under which no external link is followed.
+Handle closed_to_external_links(hid_t kind) {
+    Handle access(H5Pcreate(kind), H5Pclose);
+    H5Pset_elink_cb(access.get(), refuse_external_link, nullptr);
+    return access;
+}
+
 // The reading of one file: its name for messages, and the layout it is read in.
 class Hdf5File {
 public:
-    Hdf5File(const std::filesystem::path& path, Hdf5Layout layout) : path_(path), file_(path.string()), layout_(layout) {}
+    Hdf5File(const std::filesystem::path& path, Hdf5Layout layout)
+        : path_(path), file_(path.string()), layout_(layout), link_access_(closed_to_external_links(H5P_LINK_ACCESS)),
+          dataset_access_(closed_to_external_links(H5P_DATASET_ACCESS)), group_access_(closed_to_external_links(H5P_GROUP_ACCESS)) {}
 
     FileColumns read(const ColumnChoice& choose);
 
@@ -136,6 +152,7 @@ private:
     std::filesystem::path path_;
     std::string file_;
     Hdf5Layout layout_;
+    Handle link_access_, dataset_access_, group_access_;
 };
 
 Handle Hdf5File::open_file() const {
@@ -179,7 +196,7 @@ std::vector<Link> Hdf5File::links_of(hid_t group, const std::string& where) cons
         if (link.type != H5L_TYPE_HARD && link.type != H5L_TYPE_SOFT) continue;
         H5O_info_t info;
         // A soft link that leads nowhere is not an object: it stays "unknown" and is passed over.
-        if (H5Oget_info_by_name2(group, link.name.c_str(), &info, H5O_INFO_BASIC, H5P_DEFAULT) >= 0) link.object = info.type;
+        if (H5Oget_info_by_name2(group, link.name.c_str(), &info, H5O_INFO_BASIC, link_access_.get()) >= 0) link.object = info.type;
         else H5Eclear2(H5E_DEFAULT);
     }
     return links;
@@ -229,8 +246,8 @@ Hdf5File::Planned Hdf5File::plan(hid_t group, const Link& link, const std::strin
     p.field = variable_field(link.name, column);
     if (link.type == H5L_TYPE_EXTERNAL)
         refuse(p.field, "an external link into another file; mhbench reads only what this file holds (copy the data into it)");
-    if (link.object != H5O_TYPE_DATASET) refuse(p.field, "not a dataset (a group, a link that leads nowhere, or a named type)");
-    p.dataset = Handle(checked(H5Dopen2(group, link.name.c_str(), H5P_DEFAULT), p.field, "cannot open the dataset"), H5Dclose);
+    if (link.object != H5O_TYPE_DATASET) refuse(p.field, "not a dataset (a group, or a named type)");
+    p.dataset = Handle(checked(H5Dopen2(group, link.name.c_str(), dataset_access_.get()), p.field, "cannot open the dataset"), H5Dclose);
     const hid_t dataset = p.dataset.get();
     {
         // Data kept outside the file could be anything, a FIFO included: it is never read.
@@ -260,6 +277,10 @@ Hdf5File::Planned Hdf5File::plan(hid_t group, const Link& link, const std::strin
             refuse(p.field, fmt::format("a {} char array in an unsupported encoding or shape", shape(p.dims)));
         if (p.dims[0] > max_label_bytes)
             refuse(p.field, fmt::format("a char matrix {} characters wide; mhbench reads labels of at most {} characters", p.dims[0], max_label_bytes));
+        // Each label is at most max_label_bytes wide, but rows times width could still ask for
+        // tens of GB from a file whose compressed chunks declare them.
+        if (p.dims[0] * p.dims[1] > max_char_matrix_units)
+            refuse(p.field, fmt::format("a {} char matrix, more than the {} characters mhbench reads in one", shape(p.dims), max_char_matrix_units));
         p.kind = Kind::matlab_chars;
         p.rows = p.dims[1];
     } else if (matlab == "cell") {
@@ -452,7 +473,8 @@ FileColumns Hdf5File::read(const ColumnChoice& choose) {
                                                     matlab ? "variables" : "datasets", group_kind));
         }
         prefix = groups[0].name + "/";
-        group = Handle(checked(H5Gopen2(root.get(), groups[0].name.c_str(), H5P_DEFAULT), printable_field(groups[0].name), "cannot open the group"),
+        group = Handle(checked(H5Gopen2(root.get(), groups[0].name.c_str(), group_access_.get()), printable_field(groups[0].name),
+                               "cannot open the group"),
                        H5Gclose);
         const std::string where = printable_field(prefix);
         groups.clear();
