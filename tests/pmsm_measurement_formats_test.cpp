@@ -2,6 +2,7 @@
 // written here with matio's and HDF5's own write APIs, so the tests need no MATLAB.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +46,45 @@ void check_identical(const Measurement& a, const Measurement& b) {
     if (a.temp_magnet) CHECK(*a.temp_magnet == *b.temp_magnet);
     CHECK(a.segment_labels == b.segment_labels);
     CHECK(a.segment == b.segment);
+}
+
+std::uint32_t little_endian_u32(const std::string& s, std::size_t at) {
+    std::uint32_t v = 0;
+    for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(s[at + static_cast<std::size_t>(k)]);
+    return v;
+}
+
+// Reverses each `width`-byte value in s[at, at + n).
+void swap_values(std::string& s, std::size_t at, std::size_t n, std::size_t width) {
+    for (std::size_t k = 0; k + width <= n; k += width) std::reverse(s.begin() + static_cast<std::ptrdiff_t>(at + k), s.begin() + static_cast<std::ptrdiff_t>(at + k + width));
+}
+
+std::size_t mat_type_width(std::uint32_t type) {
+    switch (type) {
+        case 3: case 4: case 17: return 2;          // int16, uint16, utf16
+        case 5: case 6: case 7: case 18: return 4;  // int32, uint32, single, utf32
+        case 9: case 12: case 13: return 8;         // double, int64, uint64
+        default: return 1;
+    }
+}
+
+// The elements in s[at, end) of a little-endian MAT v5 file turned big-endian in place: every tag,
+// and every value by its own width; arrays (miMATRIX) element by element, cells and fields included.
+void swap_mat_elements(std::string& s, std::size_t at, std::size_t end) {
+    while (at + 8 <= end) {
+        const std::uint32_t first = little_endian_u32(s, at);
+        if (first >> 16) {  // small element: type and size in one word, the data in the next four bytes
+            swap_values(s, at, 4, 4);
+            swap_values(s, at + 4, first >> 16, mat_type_width(first & 0xFFFF));
+            at += 8;
+            continue;
+        }
+        const std::uint32_t n = little_endian_u32(s, at + 4);
+        swap_values(s, at, 8, 4);
+        if (first == 14) swap_mat_elements(s, at + 8, at + 8 + n);
+        else swap_values(s, at + 8, n, mat_type_width(first));
+        at += 8 + n + (8 - n % 8) % 8;
+    }
 }
 
 InputError refusal(const fs::path& path, const ColumnMap& map = {}) {
@@ -106,6 +146,23 @@ TEST_CASE("MAT v5, v7, v7.3 and HDF5 files give the same doubles as the CSV, bit
         fs::copy_file(csv, dir.path() / "really_csv.mat");
         CHECK(measurement_format(dir.path() / "really_csv.mat") == MeasurementFormat::Csv);
         check_identical(read_measurement(dir.path() / "really_csv.mat"), reference);
+    }
+}
+
+TEST_CASE("a MAT v5 file written on a big-endian machine reads as the same file written on a little-endian one", "[pmsm][measurement][formats]") {
+    mhb::testing::TemporaryDirectory dir;
+    for (const bool in_struct : {false, true}) {
+        const auto little = dir.path() / "little.mat", big = dir.path() / "big.mat";
+        write_mat(little, MAT_FT_MAT5, columns_of(drive()), in_struct ? "log" : "");
+        std::string bytes = mhb::testing::read_file(little);
+        REQUIRE(bytes.substr(126, 2) == "IM");
+        bytes[126] = 'M';
+        bytes[127] = 'I';
+        std::swap(bytes[124], bytes[125]);  // the version, 0x0100
+        swap_mat_elements(bytes, 128, bytes.size());
+        std::ofstream(big, std::ios::binary) << bytes;
+        INFO((in_struct ? "one struct" : "variables"));
+        check_identical(read_measurement(big), read_measurement(little));
     }
 }
 
