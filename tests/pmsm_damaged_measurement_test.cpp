@@ -3,7 +3,9 @@
 // that names the file, or read with its warnings shown (docs/data-format.md, "What the reader refuses").
 #include <catch2/catch.hpp>
 
+#include <signal.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -22,6 +24,7 @@
 #include "framework/input_error.hpp"
 #include "problems/pmsm/data/column_map.hpp"
 #include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/data/measurement_file_columns.hpp"
 #include "tests/measurement_file_writers.hpp"
 #include "tests/mhbench_cli.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
@@ -489,6 +492,64 @@ TEST_CASE("thousands of unused variables are listed in one pass and read in well
         // Quadratic listing took 60 s for a v5 file like this one; linear takes tens of milliseconds.
         CHECK(seconds < 10.0);
     }
+}
+
+TEST_CASE("a fault inside libhdf5 on a damaged file is a refusal naming the file, not the end of the program",
+          "[pmsm][measurement][damaged]") {
+    // Found by fuzz_hdf5: a global-heap object whose declared size makes libhdf5 1.10.8's H5HG_read
+    // copy past its buffer while it measures the segment labels (a segfault, before and after).
+    const fs::path path = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "damaged_files" / "hdf5_global_heap_overread.h5";
+    const auto e = read_damaged(path);
+    REQUIRE(e.refused);
+    CHECK_THAT(e.message, Catch::StartsWith(path.string() + ": the HDF5 library failed on it ("));
+    CHECK_THAT(e.message, Catch::Contains("in the process that reads the file); the file is damaged"));
+    // The same reader in this process is what the fuzzer ran; the program goes on after a refusal.
+    CHECK(read_measurement(fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "seeds" / "hdf5" / "root_datasets.h5").size() == 6);
+}
+
+TEST_CASE("the child process that reads a file hands back its columns or its refusal, and is stopped by its limits",
+          "[pmsm][measurement][damaged]") {
+    SECTION("columns, numbers and labels, bit for bit") {
+        FileColumns sent;
+        sent.columns.push_back({"Id", "i_d", Eigen::Vector3d(0.1, -2e-300, 3.5), {}});
+        TextColumn labels;
+        const char* texts[] = {"a", "b\xC2\xB5", "a"};
+        labels.rows.resize(3);
+        for (int r = 0; r < 3; ++r) labels.rows[r] = labels.index_of(texts[r]);
+        sent.columns.push_back({"op", "segment", {}, labels});
+        sent.unused = {"x", "y"};
+        sent.notes = {"a note"};
+        const auto got = read_in_child_process("f.h5", "the library", [&] { return sent; });
+        REQUIRE(got.columns.size() == 2);
+        CHECK(got.columns[0].name == "Id");
+        CHECK(got.columns[0].column == "i_d");
+        CHECK(got.columns[0].numbers == sent.columns[0].numbers);
+        REQUIRE(got.columns[1].labels);
+        CHECK(got.columns[1].labels->texts == labels.texts);
+        CHECK(got.columns[1].labels->rows == labels.rows);
+        CHECK(got.unused == sent.unused);
+        CHECK(got.notes == sent.notes);
+    }
+    auto refusal_in_child = [](const std::function<FileColumns()>& read, unsigned seconds = 600) {
+        try {
+            read_in_child_process("f.h5", "the library", read, seconds);
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    CHECK(refusal_in_child([]() -> FileColumns { throw InputError("f.h5", 0, "u_q", "row 2: not a finite number: nan"); }) ==
+          "f.h5: u_q: row 2: not a finite number: nan");
+    CHECK(refusal_in_child([]() -> FileColumns {
+              raise(SIGABRT);
+              return {};
+          }) == "f.h5: the library failed on it (Aborted, in the process that reads the file); the file is damaged or not what it claims to be "
+                "(save or copy it again)");
+    CHECK(refusal_in_child(
+              []() -> FileColumns {
+                  while (true) pause();
+              },
+              1) == "f.h5: reading it took over 1 s and was stopped (the library looping on a damaged file?)");
 }
 
 // Run by hand, `MHBENCH_DAMAGED_CORPUS=DIR mhbench_tests "[.write_damaged_corpus]"`: the damaged

@@ -39,7 +39,8 @@ void parse_binary_file(const std::string& bytes, pmsm::MeasurementFormat format,
             std::filesystem::remove(path, ec);
         }
     } removal{path};
-    pmsm::read_binary_measurement(path, format);
+    // In this process: the fuzzer looks for the faults a child process would turn into refusals.
+    pmsm::read_binary_measurement(path, format, {}, pmsm::Isolation::in_process);
 }
 
 void parse_mat5_file(const std::string& bytes) { parse_binary_file(bytes, pmsm::MeasurementFormat::Mat5, ".mat"); }

@@ -235,17 +235,21 @@ MeasurementFormat measurement_format(const std::filesystem::path& path) {
     return format_of(in, ec ? 0 : size);
 }
 
-Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map) {
+Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map,
+                                    Isolation isolation) {
     const std::string source = path.string();
     const ColumnChoice choose = [&](const std::vector<std::string>& names) { return bind_columns(names, map, source, 0, "variable"); };
+    if (format != MeasurementFormat::Mat5 && format != MeasurementFormat::Mat73 && format != MeasurementFormat::Hdf5)
+        throw std::invalid_argument("read_binary_measurement: not a binary format");
+    const Hdf5Layout layout = format == MeasurementFormat::Mat73 ? Hdf5Layout::matlab : Hdf5Layout::plain;
     // Debian's HDF5 is built without thread safety; trials may read their data in parallel, so
     // binary files are read one at a time, which costs little next to a fit.
     static std::mutex binary_reader;
     std::unique_lock lock(binary_reader);
-    auto columns = format == MeasurementFormat::Mat5    ? read_mat5_columns(path, choose)
-                   : format == MeasurementFormat::Mat73 ? read_hdf5_columns(path, choose, Hdf5Layout::matlab)
-                   : format == MeasurementFormat::Hdf5  ? read_hdf5_columns(path, choose, Hdf5Layout::plain)
-                                                        : throw std::invalid_argument("read_binary_measurement: not a binary format");
+    auto columns = format == MeasurementFormat::Mat5 ? read_mat5_columns(path, choose)
+                   : isolation == Isolation::in_process
+                       ? read_hdf5_columns(path, choose, layout)
+                       : read_in_child_process(source, "the HDF5 library", [&] { return read_hdf5_columns(path, choose, layout); });
     lock.unlock();
     return measurement_from_file_columns(std::move(columns), map, source);
 }

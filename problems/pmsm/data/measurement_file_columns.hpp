@@ -93,9 +93,22 @@ enum class Hdf5Layout { plain, matlab };
 // when the root holds no dataset and exactly one group, that group's datasets.
 FileColumns read_hdf5_columns(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout);
 
+// `read` run in a child process, with at most 3 GB more address space than this process and
+// `seconds` of wall time; its columns, or its refusal, come back through a pipe. A child ended by a
+// signal (a fault inside `library`, named in the message) or by the time limit is a refusal of `file`.
+FileColumns read_in_child_process(const std::string& file, const std::string& library, const std::function<FileColumns()>& read,
+                                  unsigned seconds = 600);
+
+// Where a binary file is parsed: libhdf5 (HDF5, MAT v7.3) in a child process by default, so that a
+// fault inside it on a damaged file is a refusal; in this process for the fuzzers, which look for
+// those faults and run thousands of inputs a second. MAT v5/v7 (mhbench's own parser) is always read
+// in this process.
+enum class Isolation { child_process, in_process };
+
 // read_measurement for a file taken as `format` (Mat5, Mat73 or Hdf5) whatever its first bytes; the
 // fuzzers drive each reader through it.
-Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map = {});
+Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map = {},
+                                    Isolation isolation = Isolation::child_process);
 
 // Shared by the CSV reader, the CSV writer and the mapping of binary files' columns (measurement.cpp).
 // A CSV field as the reader takes it: without surrounding blanks, a quoted field as its content.
