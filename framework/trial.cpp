@@ -40,10 +40,11 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     try {
         optimizer.initialize(evaluator, rng);
         record();
+        bool stopped = setup.stop && setup.stop(evaluator, 0);
         Progress progress;
         progress.budget = setup.budget;
         progress.last_step_evaluations = evaluator.evaluations();
-        while (!evaluator.exhausted() &&
+        while (!stopped && !evaluator.exhausted() &&
                (setup.budget.max_iterations <= 0 || rec.iterations < setup.budget.max_iterations)) {
             progress.iteration = rec.iterations + 1;
             progress.evaluations = evaluator.evaluations();
@@ -55,6 +56,7 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
             // An optimiser that stops evaluating would loop forever under an evaluation-only budget.
             if (setup.budget.max_iterations <= 0 && evaluator.evaluations() == before)
                 throw PluginFault("optimizer iteration made no evaluation under an evaluation-only budget");
+            stopped = setup.stop && setup.stop(evaluator, rec.iterations);
         }
     } catch (const std::exception& e) {
         rec.ok = false;

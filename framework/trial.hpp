@@ -2,6 +2,7 @@
 // One trial: one optimiser on one problem with one seed, run to its budget, with the framework's own
 // record of the best point and its convergence.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,10 @@ struct TrialSetup {
     // Record anytime data against this optimum (f*); null: none.
     const AnytimeSpec* anytime = nullptr;
     double optimum = 0.0;
+    // Asked after initialisation (iterations = 0) and after each iteration; true ends the trial
+    // there, as a spent budget would. For callers that stop on a target, a time or a user's callback
+    // (the Python module's minimize); null: the budget alone ends the trial.
+    std::function<bool(const Evaluator& evaluator, std::int64_t iterations)> stop = nullptr;
 };
 
 // Runs the trial. Exceptions thrown by the plugins (including PluginFault from the evaluator) fail
