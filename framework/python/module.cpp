@@ -35,6 +35,8 @@ PYBIND11_MODULE(_mhbench, m) {
     bind_registries(m);
     bind_problems(m);
     bind_minimize(m);
+    bind_experiments(m);
+    bind_python_plugins(m);
     m.def(
         "trial_seed",
         [](py::handle master, const std::string& optimizer, const std::string& problem, py::handle trial) {

@@ -25,6 +25,8 @@ void bind_errors(py::module_& m);
 void bind_registries(py::module_& m);
 void bind_problems(py::module_& m);
 void bind_minimize(py::module_& m);
+void bind_experiments(py::module_& m);
+void bind_python_plugins(py::module_& m);
 
 // A plugin family's own bindings (problems/pmsm/python/) add a submodule from their own file, as its
 // plugins register themselves: `const bool bound = register_submodule("pmsm", bind_pmsm);`.
@@ -104,6 +106,10 @@ private:
 };
 // The fault to throw into the trial for a Python exception raised in `where` (the GIL held).
 PluginFault python_fault(py::error_already_set&& error, const std::string& where);
+
+// A dict as the text of a TOML file (a config, a simulation profile): tables, arrays, strings,
+// booleans, integers and reals; TypeError naming `argument` and the key for anything else.
+std::string toml_text_of(py::handle mapping, const std::string& argument);
 
 // Python integers as counts and seeds (None: nullopt): TypeError or ValueError naming `argument`.
 std::optional<std::int64_t> integer_of(py::handle value, const std::string& argument, std::int64_t minimum);

@@ -12,15 +12,16 @@ its range, a config that does not load); mhbench.PluginFault (a RuntimeError) wh
 a problem breaks the framework's contract during a run. An exception raised by a Python objective or
 callback reaches the caller as it was raised, with its traceback.
 """
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
 from . import _mhbench
 from ._mhbench import InputError, IterationState, PluginFault, Problem, evaluate, trial_seed
 
 __all__ = [
-    "InputError", "IterationState", "MinimizeResult", "PluginFault", "Problem", "evaluate", "minimize",
-    "optimizers", "plugins", "problems", "trial_seed",
+    "InputError", "IterationState", "MinimizeResult", "PluginFault", "Problem", "RunResult", "evaluate", "minimize",
+    "optimizers", "plugins", "problems", "register_optimizer", "register_problem", "run", "trial_seed",
 ]
 
 
@@ -88,3 +89,71 @@ def minimize(optimizer: str, fun, bounds=None, *, budget: Optional[int] = None, 
     record = _mhbench.minimize(optimizer, fun, bounds, budget, iterations, seed, options, batch, callback, args,
                                target, max_time, problem_options)
     return MinimizeResult(**record)
+
+
+@dataclass
+class RunResult:
+    """What mhbench.run returns: where the results are (output: results.jsonl, table.md, table.csv,
+    report.html), one entry per trial in trials (numpy columns: optimizer, problem, trial, seed, ok,
+    best_fitness, evaluations, iterations, seconds, error, best_position) and table.csv's rows in table
+    (numpy columns by header; float64 where every cell is a number). failed counts the trials that
+    failed, failures says why for the first few."""
+    output: str
+    name: str
+    trials: dict
+    table: dict
+    ran: int
+    skipped: int
+    failed: int
+    failures: list
+    notes: list
+    seconds: float
+
+    def to_pandas(self, what: str = "table"):
+        """table.csv ("table") or the trials ("trials") as a pandas DataFrame; needs pandas, which mhbench
+        itself never does."""
+        try:
+            import pandas
+        except ImportError as missing:
+            raise ImportError("to_pandas needs pandas (Debian: python3-pandas); the columns are numpy arrays in "
+                              "RunResult.table and RunResult.trials") from missing
+        if what not in ("table", "trials"):
+            raise ValueError(f"what: expects 'table' or 'trials', got {what!r}")
+        return pandas.DataFrame(dict(self.table if what == "table" else self.trials))
+
+    def __repr__(self) -> str:
+        return (f"RunResult(name={self.name!r}, output={self.output!r}, ran={self.ran}, skipped={self.skipped}, "
+                f"failed={self.failed})")
+
+
+def run(config, *, threads: Optional[int] = None, out=None, resume: bool = False, plots: bool = False) -> RunResult:
+    """Runs an experiment as `mhbench run` does: config is the path of its TOML file or a dict of the same
+    content (relative paths in a dict are relative to the working directory). threads: worker threads
+    (default: all cores; results do not depend on it); out: the output directory (default: the config's
+    output); resume: keep the trials already in results.jsonl. Writes results.jsonl, table.md, table.csv
+    and report.html, and the plots when plots=True (gnuplot). Failed trials do not raise: they are counted
+    in failed, with a warning."""
+    record = _mhbench.run(config, threads, out, resume, plots)
+    result = RunResult(**record)
+    if result.failed:
+        warnings.warn(f"{result.failed} trial(s) failed; first: {result.failures[0]}", RuntimeWarning, stacklevel=2)
+    return result
+
+
+def register_problem(name: str, cls, *, summary: Optional[str] = None, parameters: Optional[dict] = None) -> None:
+    """Registers a problem written in Python under name, beside the C++ ones: minimize, run and TOML
+    experiments then use it by name. cls(**parameter values) makes one instance per trial, with
+    bounds (shape (D, 2)) and evaluate(X) -> n values for an (n, D) array; optionally optimum (the known
+    minimum, for error columns) and variable_names (D names). parameters: {name: default}; a value's type
+    is its default's. summary: shown by problems() (default: the first line of the class's docstring)."""
+    _mhbench.register_problem(name, cls, summary, parameters)
+
+
+def register_optimizer(name: str, cls, *, summary: Optional[str] = None, parameters: Optional[dict] = None) -> None:
+    """Registers an optimizer written in Python under name, beside the C++ ones. cls(**parameter values)
+    makes one instance per run, with initialize(evaluator, rng) (create and evaluate the first
+    population) and iterate(progress, evaluator, rng) (one generation). evaluator.evaluate(X) evaluates an
+    (n, D) array and counts it; rng is the run's seeded generator (uniform, normal, below), so a seed fixes
+    the run; progress.fraction() is the share of the budget used. parameters and summary as for
+    register_problem."""
+    _mhbench.register_optimizer(name, cls, summary, parameters)
