@@ -19,6 +19,9 @@ from typing import Any, Callable, Optional
 from . import _mhbench
 from ._mhbench import InputError, IterationState, PluginFault, Problem, evaluate, trial_seed
 
+if hasattr(_mhbench, "_pmsm"):  # built with the PMSM problem (the default)
+    from . import pmsm
+
 __all__ = [
     "InputError", "IterationState", "MinimizeResult", "PluginFault", "Problem", "RunResult", "evaluate", "minimize",
     "optimizers", "plugins", "problems", "register_optimizer", "register_problem", "run", "trial_seed",
