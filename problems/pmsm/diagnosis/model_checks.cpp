@@ -35,16 +35,9 @@ std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSp
     std::vector<Eigen::Index> starts;
     for (const auto& r : ranges) starts.push_back(r.first);
     const auto sums = range_normal_equations(*model, values, columns, starts);
-    const auto p = static_cast<Eigen::Index>(columns.size());
-    Eigen::MatrixXd all_gram = Eigen::MatrixXd::Zero(p, p);
-    Eigen::VectorXd all_moment = Eigen::VectorXd::Zero(p);
+    const Eigen::MatrixXd steps = leave_one_range_out_steps(sums);
     for (std::size_t s = 0; s < ranges.size(); ++s) {
-        all_gram += sums.gram[s];
-        all_moment += sums.moment[s];
-    }
-    for (std::size_t s = 0; s < ranges.size(); ++s) {
-        // The step on the other segments; a parameter they do not determine does not move.
-        const Eigen::VectorXd step = scaled_pseudo_inverse(all_gram - sums.gram[s]) * (all_moment - sums.moment[s]);
+        const Eigen::VectorXd step = steps.col(static_cast<Eigen::Index>(s));
         sse.push_back(std::max(sums.total[s] - 2.0 * step.dot(sums.moment[s]) + step.dot(sums.gram[s] * step), 0.0));
     }
     return sse;

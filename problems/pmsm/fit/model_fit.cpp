@@ -432,17 +432,8 @@ void widen_for_segment_spread(const SteadyStateModel& model, const Eigen::Vector
     if (segments < minimum_jackknife_segments) return;
     std::vector<Eigen::Index> starts;
     for (const auto& s : fit.segments) starts.push_back(s.first);
-    const auto sums = range_normal_equations(model, values, kept, starts);
+    const Eigen::MatrixXd steps = leave_one_range_out_steps(range_normal_equations(model, values, kept, starts));
     const auto p = static_cast<Eigen::Index>(kept.size());
-    Eigen::MatrixXd all_gram = Eigen::MatrixXd::Zero(p, p);
-    Eigen::VectorXd all_moment = Eigen::VectorXd::Zero(p);
-    for (std::size_t s = 0; s < segments; ++s) {
-        all_gram += sums.gram[s];
-        all_moment += sums.moment[s];
-    }
-    Eigen::MatrixXd steps(p, static_cast<Eigen::Index>(segments));
-    for (std::size_t s = 0; s < segments; ++s)
-        steps.col(static_cast<Eigen::Index>(s)) = scaled_pseudo_inverse(all_gram - sums.gram[s]) * (all_moment - sums.moment[s]);
     const double count = static_cast<double>(segments);
     const Eigen::VectorXd mean = steps.rowwise().mean();
     const Eigen::VectorXd variance = (count - 1.0) / count * (steps.colwise() - mean).rowwise().squaredNorm();
@@ -668,6 +659,21 @@ Eigen::MatrixXd prediction_jacobian(const SteadyStateModel& model, const Eigen::
         }
     });
     return jacobian;
+}
+
+Eigen::MatrixXd leave_one_range_out_steps(const RangeNormalEquations& sums) {
+    const auto ranges = sums.gram.size();
+    const Eigen::Index p = ranges == 0 ? 0 : sums.gram.front().rows();
+    Eigen::MatrixXd all_gram = Eigen::MatrixXd::Zero(p, p);
+    Eigen::VectorXd all_moment = Eigen::VectorXd::Zero(p);
+    for (std::size_t r = 0; r < ranges; ++r) {
+        all_gram += sums.gram[r];
+        all_moment += sums.moment[r];
+    }
+    Eigen::MatrixXd steps(p, static_cast<Eigen::Index>(ranges));
+    for (std::size_t r = 0; r < ranges; ++r)
+        steps.col(static_cast<Eigen::Index>(r)) = scaled_pseudo_inverse(all_gram - sums.gram[r]) * (all_moment - sums.moment[r]);
+    return steps;
 }
 
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,

@@ -134,6 +134,9 @@ struct RangeNormalEquations {
 };
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                             const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts);
+// Each range left out in turn: the Gauss-Newton step (column r for range r) that the other ranges'
+// normal equations ask of the parameters; a parameter they do not determine does not move.
+Eigen::MatrixXd leave_one_range_out_steps(const RangeNormalEquations& sums);
 
 // Which of the model's parameters (base first) are angles whose range is a full turn.
 std::vector<bool> periodic_parameters(const SteadyStateModel& model);
