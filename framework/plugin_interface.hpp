@@ -10,7 +10,8 @@
 //    longer declares require_columns nor includes the measurement; LinearFlux left machine.hpp.
 // 4: Effect gained its operating scale (a member) and narrow_range, range_end_meaning and
 //    implausible_reason; plant_flux_model takes the plant's scale; the saturation law changed.
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 4
+// 5: Effect gained is_size (a virtual: the parameters a detection limit is stated in).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 5
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

@@ -98,6 +98,18 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     CHECK(j["path"][1]["rms"].get<double>() == first["rms_after"]["total"].get<double>());
     CHECK(j["path"][1]["dbic"].get<double>() < -10.0);
     CHECK(run.output.find("next: mhbench fit --data " + csv.string() + " --model base+encoder_offset") != std::string::npos);
+    // base misses the offset, so its intervals are not valid; the recommended model's are.
+    CHECK(j["intervals_valid"] == false);
+    CHECK(j["recommended_intervals_valid"] == true);
+    CHECK(run.output.find("Model incomplete: the 95 % intervals of base are not valid") != std::string::npos);
+    // A limit for each size of each effect left out: none for the recommended offset, none for a shape.
+    bool dead_time_voltage = false;
+    for (const auto& l : j["detection_limits"]) {
+        CHECK(l["effect"] != "encoder_offset");
+        CHECK(l["parameter"] != "deadtime.current_band");
+        if (l["parameter"] == "deadtime.voltage") dead_time_voltage = l["limit"].get<double>() > 0.0;
+    }
+    CHECK(dead_time_voltage);
 
     // The report: every image it shows exists, and it names the missing effect.
     const std::string md = mhb::testing::read_file(report / "report.md");
@@ -116,6 +128,7 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     run = run_mhbench("diagnose --data " + csv.string() + " --model base+encoder_offset --report " + report.string(), dir.path() / "log");
     REQUIRE(run.exit_code == 0);
     CHECK(run.output.find("No missing effect") != std::string::npos);
+    CHECK(run.output.find("detection limits of this log") != std::string::npos);
     const std::string after = mhb::testing::read_file(report / "report.md");
     CHECK(after.find("Error before and after the effects") != std::string::npos);
     CHECK(after.find("| `base` |") != std::string::npos);

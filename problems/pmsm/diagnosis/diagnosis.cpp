@@ -1,5 +1,6 @@
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
 
+#include "problems/pmsm/diagnosis/detection_limits.hpp"
 #include "problems/pmsm/diagnosis/diagnosis_stages.hpp"
 #include "problems/pmsm/diagnosis/findings.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
@@ -55,6 +56,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.tie_experiments = std::move(r.tie_experiments);
     out.not_in_library = r.not_in_library;
     out.incomplete = r.incomplete;
+    const ModelFit& recommended = out.recommended.text() == out.model.spec.text() ? out.model : out.path.back().fit;
+    out.detection_limits = detection_limits(design, data.size(), recommended, screen.library, out.noise);
     out.findings = findings_of(out, trace.left.back(), options.floor_tolerance);
     return out;
 }

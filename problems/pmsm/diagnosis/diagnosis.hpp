@@ -46,6 +46,13 @@ struct Experiment {
     double unique_after = 0.0;  // unique fraction of the effect's signature with this point added
 };
 
+// The smallest size of an effect's size parameter that a log would reveal (detection_limits.hpp).
+struct DetectionLimit {
+    std::string effect, parameter, unit;  // parameter as "<effect>.<name>"
+    double limit = 0.0;                   // infinite: no size of it shows in this log
+    double typical = 0.0;                 // the parameter's declared typical value
+};
+
 enum class Identifiability { Identifiable, MostlyAbsorbed, NotIdentifiable };
 const char* to_string(Identifiability level);
 
@@ -187,7 +194,15 @@ struct Diagnosis {
     std::vector<PathStep> path;
     std::vector<std::string> pruned;
     ModelSpec recommended;
+    // For each library effect the recommended model leaves out, the smallest size of each of its
+    // size parameters this log would reveal.
+    std::vector<DetectionLimit> detection_limits;
     std::vector<std::string> findings;   // plain statements, most important first
+
+    // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
+    // only when nothing the data show is left out of it (an interval assumes the residual is noise).
+    bool model_intervals_valid() const { return !missing_effect_found && !not_in_library; }
+    bool recommended_intervals_valid() const { return !incomplete && !not_in_library && tie.empty(); }
 };
 
 // Fits `spec` to `data` and answers where it fails, what is missing and how sure that is: the

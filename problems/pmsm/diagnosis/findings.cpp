@@ -108,8 +108,8 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
     }
     if (d.incomplete)
         f.push_back(fmt::format("Something else is missing too: {} explains {:.0f} % of the excess residual, and what it leaves is above the "
-                                "noise floor of {:.3g} V ({}). No library effect added to it explains that; its values and intervals hold "
-                                "only as far as this structure does not bias them.",
+                                "noise floor of {:.3g} V ({}). No library effect added to it explains that. Model incomplete: its intervals "
+                                "are not valid (they take that structure for noise), and its values hold only as far as the structure does not bias them.",
                                 last.fit.spec.text(), 100.0 * last.explained, floor,
                                 last.signature.empty() ? std::string("structure beyond the noise") : last.signature));
     else if (!last.signature.empty())
@@ -149,8 +149,9 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, std::ve
         f.push_back(text);
     } else if (!d.missing_effect_found) {
         f.push_back(d.lack_of_fit.means_available || has_column(d, "theta_e")
-                        ? "No missing effect: the residual is at the noise floor and no library effect earns its parameters."
-                        : "No missing effect can be seen on this data.");
+                        ? std::string("No missing effect: the residual is at the noise floor and no library effect earns its parameters.") +
+                              (d.detection_limits.empty() ? "" : " An effect smaller than this log's detection limit (listed) may still be present.")
+                        : std::string("No missing effect can be seen on this data."));
     }
 }
 
@@ -211,6 +212,12 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(), other_missing_effect(d, c.effect)));
     for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
     unresolved_findings(d, left_by_last_step, f);
+    if (!d.model_intervals_valid())
+        f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",
+                                d.model.spec.text(),
+                                d.recommended_intervals_valid() && d.recommended.text() != d.model.spec.text()
+                                    ? "; those of " + d.recommended.text() + " hold as far as this log can tell"
+                                    : std::string()));
     data_findings(d, f);
     return f;
 }

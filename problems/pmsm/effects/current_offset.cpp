@@ -17,6 +17,7 @@ public:
     Complex plant_current_sensor_offset() const override { return alpha_beta_offset(values()[0], values()[1]); }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::SensorCurrents); }
+    bool is_size(std::size_t) const override { return true; }
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         // The logged angle is the controller's, the frame the offset was measured in.

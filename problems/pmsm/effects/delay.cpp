@@ -14,6 +14,7 @@ public:
     double plant_delay() const override { return values()[0]; }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Delay); }
+    bool is_size(std::size_t) const override { return true; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {

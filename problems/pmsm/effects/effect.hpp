@@ -153,6 +153,10 @@ public:
     // column exactly. Checked for every registered effect against every other one
     // (tests/pmsm_steady_state_model_test.cpp); an effect acting in the sensor stages never is.
     virtual bool model_linear_in(std::size_t /*k*/) const { return false; }
+    // Whether real parameter k is a size of the effect (at zero the effect vanishes), not a shape:
+    // a diagnosis states the smallest size each effect could have and still show in a log
+    // (diagnosis/detection_limits.hpp). The linear parameters unless the effect says otherwise.
+    virtual bool is_size(std::size_t k) const { return model_linear_in(k); }
 
     // ---- what the data allow ----
     // Narrows the plausible range [lo, hi] of real parameter k to what data of this scale() can tell

@@ -22,6 +22,7 @@ public:
     double plant_angle_offset() const override { return values()[0]; }
 
     unsigned model_stages() const override { return ModelStage::SensorAngle | ModelStage::ControllerFrame; }
+    bool is_size(std::size_t) const override { return true; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     void model(ModelStage stage, const double* p, ModelState& s) const override {
         if (stage == ModelStage::SensorAngle) {

@@ -39,6 +39,8 @@ json diagnosis_json(const Diagnosis& d) {
     out["not_in_library"] = d.not_in_library;
     out["incomplete"] = d.incomplete;
     out["recommended_model"] = d.recommended.text();
+    out["intervals_valid"] = d.model_intervals_valid();
+    out["recommended_intervals_valid"] = d.recommended_intervals_valid();
     json path = json::array();
     for (const auto& step : d.path)
         path.push_back({{"model", step.fit.spec.text()},
@@ -53,6 +55,10 @@ json diagnosis_json(const Diagnosis& d) {
     out["path"] = path;
     out["pruned"] = d.pruned;
     out["findings"] = d.findings;
+    json limits = json::array();
+    for (const auto& l : d.detection_limits)
+        limits.push_back({{"effect", l.effect}, {"parameter", l.parameter}, {"limit", finite_or_null(l.limit)}, {"unit", l.unit}, {"typical", l.typical}});
+    out["detection_limits"] = limits;
     json candidates = json::array();
     for (const auto& c : d.candidates) {
         json e;

@@ -236,6 +236,17 @@ void add_doubts(Document& doc, const Diagnosis& d) {
     if (doubts.items.empty()) doc.add(Paragraph{"No near ties, every candidate is identifiable on this design, and every library effect was tried."});
     else doc.add(std::move(doubts));
     doc.add(Paragraph{"How these verdicts are reached: docs/effects.md, \"How diagnose decides\"."});
+    if (!d.detection_limits.empty()) {
+        doc.add(Heading{3, "Detection limits of this log"});
+        doc.add(Paragraph{fmt::format("The smallest size at which each effect that {} leaves out would be found, in about half of such logs "
+                                      "(docs/diagnosis.md, \"Detection limits\"): a smaller one may be present.",
+                                      d.recommended.text())});
+        Table limits("detection limits", {"parameter", "limit", "unit", "the effect's default"});
+        for (const auto& l : d.detection_limits)
+            limits.add_row({l.parameter, std::isfinite(l.limit) ? fmt::format("{:.3g}", l.limit) : std::string("no size shows"), l.unit,
+                            fmt::format("{:.3g}", l.typical)});
+        doc.add(std::move(limits));
+    }
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "problems/pmsm/report/diagnosis_report.hpp"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 namespace mhb::pmsm {
@@ -30,6 +32,14 @@ std::string diagnosis_text(const Diagnosis& d) {
     }
     t += "\n" + path_text(d) + "\n";
     for (const auto& f : d.findings) t += "- " + f + "\n";
+    if (!d.detection_limits.empty()) {
+        t += "\ndetection limits of this log: the smallest size at which each effect left out would be found (in about half of such logs)\n";
+        for (const auto& l : d.detection_limits) {
+            const std::string size = std::isfinite(l.limit) ? fmt::format("{:.3g} {}", l.limit, l.unit) : std::string("no size shows in this log");
+            t += l.typical != 0.0 ? fmt::format("  {:<30} {:<36} (default {:.3g})\n", l.parameter, size, l.typical)
+                                  : fmt::format("  {:<30} {}\n", l.parameter, size);
+        }
+    }
     return t;
 }
 
