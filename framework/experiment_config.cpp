@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <functional>
 #include <cstring>
@@ -199,9 +200,10 @@ AnytimeSpec read_anytime(const ConfigReader& reader, const toml::node& node) {
     const long line = line_of(node);
     for (const auto& [k, v] : *table) {
         const std::string key(k.str());
-        if (key != "targets" && key != "ert_targets" && key != "points_per_decade" && key != "bootstrap" && key != "iteration_trace")
+        if (key != "targets" && key != "ert_targets" && key != "points_per_decade" && key != "bootstrap" && key != "iteration_trace" &&
+            key != "checkpoints")
             reader.fail(line_of(v), "anytime." + key,
-                        "unknown key; expected targets, ert_targets, points_per_decade, bootstrap or iteration_trace");
+                        "unknown key; expected targets, ert_targets, points_per_decade, bootstrap, iteration_trace or checkpoints");
     }
     AnytimeSpec spec;
     spec.targets = table->get("targets") ? read_targets(reader, *table->get("targets"), "anytime.targets") : bbob_targets();
@@ -230,10 +232,38 @@ AnytimeSpec read_anytime(const ConfigReader& reader, const toml::node& node) {
         if (!b) reader.fail(line_of(*trace), "anytime.iteration_trace", "expects true or false");
         spec.iteration_trace = b->get();
     }
+    if (const auto* node = table->get("checkpoints")) {
+        const char* expected = "expects \"cec2017\", \"cec2022\" or a list of fractions of the evaluation budget in (0, 1], e.g. [0.1, 0.5, 1]";
+        if (const auto* name = node->as_string()) {
+            if (!set_named_checkpoints(spec, name->get())) reader.fail(line_of(*node), "anytime.checkpoints", expected);
+        } else if (const auto* list = node->as_array(); list && !list->empty()) {
+            for (const auto& item : *list) {
+                const auto value = item.value<double>();
+                if (!value || !(*value > 0) || !(*value <= 1)) reader.fail(line_of(item), "anytime.checkpoints", expected);
+                spec.checkpoints.push_back(*value);
+            }
+            if (spec.checkpoints.size() > 1000)
+                reader.fail(line_of(*node), "anytime.checkpoints", fmt::format("at most 1000 checkpoints (got {})", spec.checkpoints.size()));
+            std::sort(spec.checkpoints.begin(), spec.checkpoints.end());
+            spec.checkpoints.erase(std::unique(spec.checkpoints.begin(), spec.checkpoints.end()), spec.checkpoints.end());
+        } else {
+            reader.fail(line_of(*node), "anytime.checkpoints", expected);
+        }
+    }
     return spec;
 }
 
 }  // namespace
+
+std::int64_t evaluation_budget(const Budget& budget, std::int64_t evaluations_per_dimension,
+                               const std::map<int, std::int64_t>& evaluations_by_dimension, int dimension) {
+    if (!evaluations_by_dimension.empty()) {
+        const auto it = evaluations_by_dimension.find(dimension);
+        return it == evaluations_by_dimension.end() ? 0 : it->second;
+    }
+    if (evaluations_per_dimension > 0) return evaluations_per_dimension * dimension;
+    return budget.max_evaluations;
+}
 
 std::vector<std::map<std::string, ParameterValue>> expand_grid(
     const std::vector<std::pair<std::string, std::vector<ParameterValue>>>& axes) {
@@ -324,9 +354,10 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
                                                     "a [budget] table with iterations and/or evaluations is required");
     const auto& bt = *budget->as_table();
     for (const auto& [k, v] : bt)
-        if (k.str() != "iterations" && k.str() != "evaluations" && k.str() != "evaluations_per_dimension")
+        if (k.str() != "iterations" && k.str() != "evaluations" && k.str() != "evaluations_per_dimension" &&
+            k.str() != "evaluations_by_dimension")
             reader.fail(line_of(v), "budget." + std::string(k.str()),
-                        "unknown key; expected iterations, evaluations or evaluations_per_dimension");
+                        "unknown key; expected iterations, evaluations, evaluations_per_dimension or evaluations_by_dimension");
     const char* trace_cost = ": each iteration adds an entry to the trial's convergence trace, held in memory and written "
                              "to results.jsonl";
     spec.budget.max_iterations =
@@ -339,13 +370,42 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
     if (spec.evaluations_per_dimension > 0 && spec.budget.max_evaluations > 0)
         reader.fail(line_of(*bt.get("evaluations_per_dimension")), "budget.evaluations_per_dimension",
                     "set evaluations or evaluations_per_dimension, not both");
-    if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0 && spec.evaluations_per_dimension == 0)
-        reader.fail(line_of(*budget), "budget", "set iterations, evaluations or both (evaluations_per_dimension in place of evaluations)");
+    if (const auto* node = bt.get("evaluations_by_dimension")) {
+        const std::string field = "budget.evaluations_by_dimension";
+        spec.evaluations_by_dimension_line = line_of(*node);
+        const auto* table = node->as_table();
+        if (!table || table->empty())
+            reader.fail(line_of(*node), field, "expects a table of dimension = evaluations, e.g. { 10 = 200000, 20 = 1000000 }");
+        if (spec.budget.max_evaluations > 0 || spec.evaluations_per_dimension > 0)
+            reader.fail(line_of(*node), field, "set one of evaluations, evaluations_per_dimension and evaluations_by_dimension");
+        for (const auto& [k, v] : *table) {
+            const std::string key(k.str());
+            int dimension = 0;
+            const auto parsed = std::from_chars(key.data(), key.data() + key.size(), dimension);
+            if (parsed.ec != std::errc() || parsed.ptr != key.data() + key.size() || dimension < 1)
+                reader.fail(line_of(v), field + "." + key, "a key must be a dimension (a whole number >= 1)");
+            const auto value = v.as_integer();
+            if (!value || value->get() < 1 || value->get() > max_budget_evaluations)
+                reader.fail(line_of(v), field + "." + key, fmt::format("expects a whole number of evaluations from 1 to {}", max_budget_evaluations));
+            spec.evaluations_by_dimension[dimension] = value->get();
+        }
+    }
+    if (spec.budget.max_iterations == 0 && spec.budget.max_evaluations == 0 && spec.evaluations_per_dimension == 0 &&
+        spec.evaluations_by_dimension.empty())
+        reader.fail(line_of(*budget), "budget",
+                    "set iterations, evaluations or both (evaluations_per_dimension or evaluations_by_dimension in place of evaluations)");
 
     spec.optimizers = reader.variants(root, "optimizer", "optimizer", OptimizerRegistry::instance());
     spec.problems = reader.variants(root, "problem", "problem", ProblemRegistry::instance());
 
-    if (const auto* node = root.get("anytime")) spec.anytime = read_anytime(reader, *node);
+    if (const auto* node = root.get("anytime")) {
+        spec.anytime = read_anytime(reader, *node);
+        const bool evaluation_budget_given =
+            spec.budget.max_evaluations > 0 || spec.evaluations_per_dimension > 0 || !spec.evaluations_by_dimension.empty();
+        if ((!spec.anytime->checkpoints.empty() || !spec.anytime->checkpoint_exponents.empty()) && !evaluation_budget_given)
+            reader.fail(line_of(*node->as_table()->get("checkpoints")), "anytime.checkpoints",
+                        "are fractions of the evaluation budget: set budget.evaluations, evaluations_per_dimension or evaluations_by_dimension");
+    }
 
     spec.baseline = spec.optimizers.front().label;
     spec.references.clear();
@@ -375,12 +435,19 @@ ExperimentSpec parse_experiment(const std::string& text, const fs::path& file, P
                     known_label(s->get(), item, "analysis.references");
                     spec.references.push_back(s->get());
                 }
+            } else if (key == "error_threshold") {
+                const auto d = v.value<double>();
+                if (!d || !(*d >= 0) || !std::isfinite(*d))
+                    reader.fail(line_of(v), "analysis.error_threshold",
+                                "expects a number >= 0: errors f - f* below it are reported as 0 (the CEC rule is 1e-8)");
+                spec.error_threshold = *d;
+                spec.error_threshold_line = line_of(v);
             } else if (key == "per_problem") {
                 auto b = v.as_boolean();
                 if (!b) reader.fail(line_of(v), "analysis.per_problem", "expects true or false");
                 spec.per_problem = b->get();
             } else {
-                reader.fail(line_of(v), "analysis." + key, "unknown key; expected baseline, references or per_problem");
+                reader.fail(line_of(v), "analysis." + key, "unknown key; expected baseline, references, error_threshold or per_problem");
             }
         }
     }

@@ -49,11 +49,21 @@ struct ExperimentSpec {
     // `budget.evaluations_per_dimension`: each problem's evaluation budget is this times its
     // dimension (as COCO budgets scale), in place of one `evaluations` for all; 0 when not given.
     std::int64_t evaluations_per_dimension = 0;
+    // `budget.evaluations_by_dimension`: each problem's evaluation budget by its dimension (the CEC
+    // 2022 protocol's 200 000 at D = 10 and 1 000 000 at D = 20), in place of `evaluations`.
+    std::map<int, std::int64_t> evaluations_by_dimension;
+    long evaluations_by_dimension_line = 0;
     std::filesystem::path output;     // resolved: relative paths are relative to the config file
     std::vector<PluginVariant> optimizers;
     std::vector<PluginVariant> problems;
     std::string baseline;             // optimiser label the others are tested against
     std::vector<std::string> references;  // labels for pairwise columns (default: the baseline)
+    // `analysis.error_threshold`: errors f - f* below it are reported as 0 (the CEC rule, 1e-8); 0: none.
+    double error_threshold = 0;
+    long error_threshold_line = 0;
+    // `mhbench run --dimension D`: only the problems of this dimension run (0: all); recorded with
+    // the results, so that a directory says which part of the config it holds.
+    int selected_dimension = 0;
     bool plots = true;
     // `analysis.per_problem = false`: no table and no plot per problem variant (a campaign has
     // thousands); the CSV keeps every row, and the summaries across problems stay.
@@ -80,6 +90,11 @@ ExperimentSpec load_experiment(const std::filesystem::path& file, PluginLoading 
 // The same from text already read; `file` names it in messages and anchors a relative `output`.
 ExperimentSpec parse_experiment(const std::string& text, const std::filesystem::path& file,
                                 PluginLoading plugins = PluginLoading::load);
+
+// The evaluation budget of a problem of this dimension: `evaluations_by_dimension` when given (0 for a
+// dimension it does not list), else `evaluations_per_dimension` times the dimension, else `evaluations`.
+std::int64_t evaluation_budget(const Budget& budget, std::int64_t evaluations_per_dimension,
+                               const std::map<int, std::int64_t>& evaluations_by_dimension, int dimension);
 
 // Expands list-valued entries into the cartesian product, in declaration order.
 std::vector<std::map<std::string, ParameterValue>> expand_grid(

@@ -138,6 +138,18 @@ void check_resumable(const ExperimentSpec& spec, const ExperimentInfo& previous,
     if (previous.evaluations_per_dimension != spec.evaluations_per_dimension)
         refuse(0, "budget.evaluations_per_dimension",
                fmt::format("is {} here but was {}", spec.evaluations_per_dimension, previous.evaluations_per_dimension));
+    if (previous.evaluations_by_dimension != spec.evaluations_by_dimension)
+        refuse(spec.evaluations_by_dimension_line, "budget.evaluations_by_dimension", "differs from the run's");
+    if (previous.error_threshold != spec.error_threshold)
+        refuse(spec.error_threshold_line, "analysis.error_threshold",
+               fmt::format("is {:g} here but was {:g}", spec.error_threshold, previous.error_threshold));
+    if (previous.selected_dimension != spec.selected_dimension)
+        throw InputError("command line", 0, "--dimension",
+                         fmt::format("this run selects {} but the run being resumed in {} selected {}; resume it with the same --dimension",
+                                     spec.selected_dimension ? "dimension " + std::to_string(spec.selected_dimension) : std::string("every dimension"),
+                                     output.string(),
+                                     previous.selected_dimension ? "dimension " + std::to_string(previous.selected_dimension)
+                                                                 : std::string("every dimension")));
     if (previous.budget.max_evaluations != spec.budget.max_evaluations)
         refuse(0, "budget.evaluations",
                fmt::format("is {} here but was {}", spec.budget.max_evaluations, previous.budget.max_evaluations));
@@ -181,6 +193,9 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
     info.seed = spec.seed;
     info.budget = spec.budget;
     info.evaluations_per_dimension = spec.evaluations_per_dimension;
+    info.evaluations_by_dimension = spec.evaluations_by_dimension;
+    info.error_threshold = spec.error_threshold;
+    info.selected_dimension = spec.selected_dimension;
     info.optimizers = spec.optimizers;
     info.baseline = spec.baseline;
     info.references = spec.references;
@@ -204,6 +219,14 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
         if (spec.anytime && !p.truth.optimum_value)
             throw InputError(spec.file.string(), v.line, "problem " + v.label,
                              "does not know its optimum f*, which [anytime] needs: its targets are precisions f - f*");
+        if (spec.error_threshold > 0 && !p.truth.optimum_value)
+            throw InputError(spec.file.string(), v.line, "problem " + v.label,
+                             "does not know its optimum f*, which analysis.error_threshold needs (line " +
+                                 std::to_string(spec.error_threshold_line) + "): it applies to errors f - f*");
+        if (!spec.evaluations_by_dimension.empty() && !spec.evaluations_by_dimension.count(p.dimension))
+            throw InputError(spec.file.string(), v.line, "problem " + v.label,
+                             fmt::format("has dimension {}, for which budget.evaluations_by_dimension (line {}) gives no budget",
+                                         p.dimension, spec.evaluations_by_dimension_line));
         info.problems.push_back(std::move(p));
     }
     for (const auto& pub : spec.published)
@@ -222,6 +245,27 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
         }
     }
     return info;
+}
+
+void select_dimension(ExperimentSpec& spec, int dimension) {
+    std::vector<PluginVariant> kept;
+    std::set<int> found;
+    auto shared = std::make_shared<SharedProblemData>();
+    for (const auto& v : spec.problems) {
+        const int d = create_problem(spec, v, problem_context(spec, derive_seed(spec.seed, "", v.label, 0), shared))->dimension();
+        found.insert(d);
+        if (d == dimension) kept.push_back(v);
+    }
+    if (kept.empty())
+        throw InputError("command line", 0, "--dimension",
+                         fmt::format("no problem of {} has dimension {}; its dimensions are {}", spec.file.string(), dimension,
+                                     fmt::join(found, ", ")));
+    spec.problems = std::move(kept);
+    spec.selected_dimension = dimension;
+    // A reference number quoted for a problem left out has no row to stand beside.
+    std::erase_if(spec.published, [&](const PublishedResult& r) {
+        return std::none_of(spec.problems.begin(), spec.problems.end(), [&](const PluginVariant& v) { return v.label == r.problem; });
+    });
 }
 
 std::string rank_results_name(int rank) { return fmt::format("results.rank-{}.jsonl", rank); }
@@ -379,8 +423,8 @@ RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, c
                 auto problem = instantiate(pv, problem_context(spec, seed, shared));
                 auto optimizer = make_optimizer(ov.name, ov.values);
                 TrialSetup setup{spec.budget, seed, problem->has_named_parameters()};
-                if (spec.evaluations_per_dimension > 0)
-                    setup.budget.max_evaluations = spec.evaluations_per_dimension * problem->dimension();
+                setup.budget.max_evaluations = evaluation_budget(spec.budget, spec.evaluations_per_dimension,
+                                                                 spec.evaluations_by_dimension, problem->dimension());
                 if (spec.anytime) {
                     setup.record_trace = spec.anytime->iteration_trace;
                     setup.anytime = &*spec.anytime;

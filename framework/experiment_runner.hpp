@@ -43,6 +43,10 @@ ExperimentInfo describe_experiment(const ExperimentSpec& spec, std::shared_ptr<S
 
 RunSummary run_experiment(const ExperimentSpec& spec, const RunOptions& options);
 
+// Keeps only the problems of this dimension (`mhbench run --dimension D`) and records the choice in
+// the spec, so the results say which part of the config they hold; InputError when none has it.
+void select_dimension(ExperimentSpec& spec, int dimension);
+
 // run_experiment in two steps, for runs spread over processes (framework/mpi/distributed_run.cpp):
 // one process prepares the output, then every process runs its share of the trials into a results
 // file of its own, and the first joins those files.

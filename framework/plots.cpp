@@ -100,20 +100,31 @@ namespace {
 
 struct Band {
     std::vector<double> x, median, q25, q75;
+    bool at_checkpoints = false;
 };
 
 // Median and quartiles over trials at each iteration index; x is the median evaluation count there.
-Band convergence_band(const ProblemInfo& prob, const std::vector<const TrialRecord*>& trials) {
+// Trials that recorded the budget's checkpoints ([anytime] checkpoints) are drawn at those instead:
+// they are the same evaluation counts in every trial, where iterations are not.
+Band convergence_band(const ExperimentInfo& info, const ProblemInfo& prob, const std::vector<const TrialRecord*>& trials) {
     Band band;
+    const bool checkpoints = !trials.empty() && std::all_of(trials.begin(), trials.end(), [](const TrialRecord* t) {
+        return !t->anytime.checkpoint_evaluations.empty();
+    });
+    auto evaluations_of = [&](const TrialRecord* t) -> const std::vector<std::int64_t>& {
+        return checkpoints ? t->anytime.checkpoint_evaluations : t->trace_evaluations;
+    };
+    auto best_of = [&](const TrialRecord* t) -> const std::vector<double>& { return checkpoints ? t->anytime.checkpoint_best : t->trace_best; };
+    band.at_checkpoints = checkpoints;
     std::size_t length = 0;
-    for (const auto* t : trials) length = std::max(length, t->trace_best.size());
+    for (const auto* t : trials) length = std::max(length, best_of(t).size());
     for (std::size_t k = 0; k < length; ++k) {
         std::vector<double> values, evals;
         for (const auto* t : trials) {
-            if (t->trace_best.empty()) continue;
-            const std::size_t i = std::min(k, t->trace_best.size() - 1);  // a finished trial holds its last value
-            values.push_back(prob.truth.optimum_value ? t->trace_best[i] - *prob.truth.optimum_value : t->trace_best[i]);
-            evals.push_back(static_cast<double>(t->trace_evaluations[i]));
+            if (best_of(t).empty()) continue;
+            const std::size_t i = std::min(k, best_of(t).size() - 1);  // a finished trial holds its last value
+            values.push_back(reported_error(info, prob, best_of(t)[i]));
+            evals.push_back(static_cast<double>(evaluations_of(t)[i]));
         }
         if (values.empty()) continue;
         band.x.push_back(stats::quantile(evals, 0.5));
@@ -164,7 +175,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
             bool non_positive = false;
             std::vector<Band> bands;
             for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
-                bands.push_back(convergence_band(prob, groups.ok[p][o]));
+                bands.push_back(convergence_band(info, prob, groups.ok[p][o]));
                 for (double v : bands.back().q25) {
                     if (v > 0) min_positive = std::min(min_positive, v);
                     else non_positive = true;
@@ -191,9 +202,14 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
             }
             out.close();
             if (!plots.empty()) {
+                const bool at_checkpoints = std::any_of(bands.begin(), bands.end(), [](const Band& b) { return b.at_checkpoints; });
                 std::string body = fmt::format("set title {} noenhanced\nset xlabel 'function evaluations'\n",
                                                gnuplot_quote(prob.label + ": best-so-far, median and inter-quartile range over " +
-                                                             std::to_string(info.trials) + " trials"));
+                                                             std::to_string(info.trials) + " trials" +
+                                                             (at_checkpoints ? ", at the budget's checkpoints" : "")));
+                // The checkpoints of the CEC rules are spaced by ratios (D^(k/5-3)), or crowd the
+                // budget's first tenth (0.01, 0.02, 0.03, 0.05): a log axis shows them apart.
+                if (at_checkpoints) body += "set logscale x\nset format x '10^{%L}'\n";
                 body += fmt::format("set ylabel {}\n", gnuplot_quote(std::string(shifted ? "f - f*" : "f") +
                                                                      (log_scale && non_positive ? " (values <= 0 drawn at the bottom)" : "")));
                 if (log_scale) body += "set logscale y\nset format y '10^{%L}'\n";
@@ -211,7 +227,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
             for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
                 out << "# " << info.optimizers[o].label << "\n";
                 for (const auto* t : groups.ok[p][o]) {
-                    const double e = final_error(prob, *t);
+                    const double e = final_error(info, prob, *t);
                     all_positive = all_positive && e > 0;
                     any = true;
                     out << fmt::format("{:.17g}\n", e);

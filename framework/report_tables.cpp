@@ -68,7 +68,7 @@ std::vector<std::vector<GroupSummary>> summarize_groups(const ExperimentInfo& in
             std::vector<double> fitness;
             double evaluations = 0;
             for (const auto* t : trials) {
-                errors[o].push_back(final_error(prob, *t));
+                errors[o].push_back(final_error(info, prob, *t));
                 fitness.push_back(t->best_fitness);
                 evaluations += static_cast<double>(t->evaluations);
                 g.total_seconds += t->seconds;
@@ -95,10 +95,49 @@ std::vector<std::vector<GroupSummary>> summarize_groups(const ExperimentInfo& in
     return out;
 }
 
+// The error at each of the budget's checkpoints ([anytime] checkpoints), mean and median over the
+// trials, as the CEC reports' convergence records; nothing when the trials did not record them.
+void add_checkpoint_table(Document& doc, const ExperimentInfo& info, const ProblemInfo& prob,
+                          const std::vector<std::vector<const TrialRecord*>>& trials) {
+    std::vector<std::int64_t> evaluations;
+    for (const auto& group : trials)
+        for (const auto* t : group)
+            if (t->anytime.checkpoint_evaluations.size() > evaluations.size()) evaluations = t->anytime.checkpoint_evaluations;
+    if (evaluations.empty()) return;
+    std::vector<Column> columns{"Optimizer", "statistic"};
+    for (auto e : evaluations) columns.emplace_back(fmt::format("{}", e));
+    const std::string title = prob.label + ": error f − f* at the budget's checkpoints (evaluations)";
+    doc.add(Heading{3, title});
+    Table table(title, std::move(columns));
+    for (std::size_t o = 0; o < info.optimizers.size(); ++o) {
+        if (trials[o].empty()) continue;
+        std::vector<stats::Summary> at(evaluations.size());
+        for (std::size_t k = 0; k < evaluations.size(); ++k) {
+            std::vector<double> errors;
+            for (const auto* t : trials[o])
+                if (k < t->anytime.checkpoint_best.size()) errors.push_back(reported_error(info, prob, t->anytime.checkpoint_best[k]));
+            at[k] = stats::summarize(errors);
+        }
+        for (const char* statistic : {"mean", "median"}) {
+            std::vector<Cell> row{info.optimizers[o].label, statistic};
+            for (const auto& s : at) row.emplace_back(s.n ? num(std::string_view(statistic) == "mean" ? s.mean : s.median) : "–");
+            table.add_row(std::move(row));
+        }
+    }
+    table.add_note("Over the trials that reached each checkpoint (a trial ended by an iteration limit may stop short of the last).");
+    doc.add(std::move(table));
+}
+
 }  // namespace
 
-double final_error(const ProblemInfo& problem, const TrialRecord& record) {
-    return problem.truth.optimum_value ? record.best_fitness - *problem.truth.optimum_value : record.best_fitness;
+double reported_error(const ExperimentInfo& info, const ProblemInfo& problem, double f) {
+    if (!problem.truth.optimum_value) return f;
+    const double error = f - *problem.truth.optimum_value;
+    return info.error_threshold > 0 && error < info.error_threshold ? 0.0 : error;
+}
+
+double final_error(const ExperimentInfo& info, const ProblemInfo& problem, const TrialRecord& record) {
+    return reported_error(info, problem, record.best_fitness);
 }
 
 TrialGroups group_trials(const ExperimentInfo& info, const std::vector<TrialRecord>& records) {
@@ -130,16 +169,27 @@ Document tables_document(const ExperimentInfo& info, const std::vector<TrialReco
     Document doc;
     doc.add(Heading{1, info.name});
     if (!info.description.empty()) doc.add(Paragraph{info.description});
-    const std::string evaluations = info.evaluations_per_dimension > 0
-                                        ? fmt::format("{} x dimension", info.evaluations_per_dimension)
-                                        : fmt::format("{}", info.budget.max_evaluations);
-    const bool evaluation_limit = info.budget.max_evaluations > 0 || info.evaluations_per_dimension > 0;
+    std::string evaluations = info.evaluations_per_dimension > 0 ? fmt::format("{} x dimension", info.evaluations_per_dimension)
+                                                                  : fmt::format("{}", info.budget.max_evaluations);
+    if (!info.evaluations_by_dimension.empty()) {
+        evaluations.clear();
+        for (const auto& [d, e] : info.evaluations_by_dimension)
+            evaluations += fmt::format("{}{} at D = {}", evaluations.empty() ? "" : ", ", e, d);
+    }
+    const bool evaluation_limit = info.budget.max_evaluations > 0 || info.evaluations_per_dimension > 0 ||
+                                  !info.evaluations_by_dimension.empty();
     doc.add(Paragraph{fmt::format("Config `{}`; {} trial{} per pair; master seed {}; budget: {}.",
                                   std::filesystem::path(info.config_file).filename().string(), info.trials, info.trials == 1 ? "" : "s", info.seed,
                                   evaluation_limit ? (info.budget.max_iterations > 0 ? fmt::format("{} iterations or {} evaluations, whichever first",
                                                                                                    info.budget.max_iterations, evaluations)
                                                                                      : fmt::format("{} function evaluations", evaluations))
                                                    : fmt::format("{} iterations", info.budget.max_iterations))});
+    if (info.selected_dimension > 0)
+        doc.add(Paragraph{fmt::format("Only the config's problems of dimension {} were run (`mhbench run --dimension {}`).",
+                                      info.selected_dimension, info.selected_dimension)});
+    if (info.error_threshold > 0)
+        doc.add(Paragraph{fmt::format("Errors f − f* below {:g} are counted as 0 (analysis.error_threshold), in every table, rank and plot.",
+                                      info.error_threshold)});
     doc.add(Paragraph{"Columns: final fitness statistics over the successful trials (minus the known optimum f* where "
                       "there is one), the mean number of function evaluations used, two-sided Wilcoxon rank-sum p-values and "
                       "Vargha-Delaney A12 (probability that a run of the row's optimiser ends lower than one of the reference) "
@@ -178,6 +228,7 @@ Document tables_document(const ExperimentInfo& info, const std::vector<TrialReco
             results.add_row(std::move(row));
         }
         doc.add(std::move(results));
+        add_checkpoint_table(doc, info, prob, groups.ok[p]);
 
         const auto& target = accuracy_target(prob);
         if (prob.named_parameters && (target || prob.truth.reference_solution)) {

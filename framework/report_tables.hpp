@@ -17,8 +17,11 @@ struct TrialGroups {
 };
 TrialGroups group_trials(const ExperimentInfo& info, const std::vector<TrialRecord>& records);
 
-// The value tables and plots use for a trial: final fitness minus the known optimum when there is one.
-double final_error(const ProblemInfo& problem, const TrialRecord& record);
+// The value tables and plots use for a fitness f: f minus the known optimum when there is one, and 0
+// when that error is below the experiment's error threshold (analysis.error_threshold).
+double reported_error(const ExperimentInfo& info, const ProblemInfo& problem, double f);
+// reported_error of a trial's final best fitness.
+double final_error(const ExperimentInfo& info, const ProblemInfo& problem, const TrialRecord& record);
 
 // What table.md says: per problem the final errors and identified parameters, the Friedman ranks and
 // the anytime section.

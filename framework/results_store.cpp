@@ -147,6 +147,11 @@ json to_json(const TrialRecord& r) {
         for (double b : r.anytime.best) best.push_back(number(b));
         for (double b : r.anytime.hit_best) hit_best.push_back(number(b));
         j["anytime"] = {{"evaluations", r.anytime.evaluations}, {"best", best}, {"hits", r.anytime.hits}, {"hit_best", hit_best}};
+        if (!r.anytime.checkpoint_evaluations.empty()) {
+            json checkpoint_best = json::array();
+            for (double b : r.anytime.checkpoint_best) checkpoint_best.push_back(number(b));
+            j["anytime"]["checkpoints"] = {{"evaluations", r.anytime.checkpoint_evaluations}, {"best", checkpoint_best}};
+        }
     }
     return j;
 }
@@ -175,6 +180,12 @@ TrialRecord trial_from_json(const json& j) {
         for (const auto& b : a.at("best")) r.anytime.best.push_back(number_from(b));
         r.anytime.hits = a.at("hits").get<std::vector<std::int64_t>>();
         for (const auto& b : a.at("hit_best")) r.anytime.hit_best.push_back(number_from(b));
+        if (a.contains("checkpoints")) {
+            r.anytime.checkpoint_evaluations = a["checkpoints"].at("evaluations").get<std::vector<std::int64_t>>();
+            for (const auto& b : a["checkpoints"].at("best")) r.anytime.checkpoint_best.push_back(number_from(b));
+            if (r.anytime.checkpoint_best.size() != r.anytime.checkpoint_evaluations.size())
+                throw std::invalid_argument("anytime: the checkpoints' evaluations and best differ in length");
+        }
         if (r.anytime.best.size() != r.anytime.evaluations.size() || r.anytime.hit_best.size() != r.anytime.hits.size())
             throw std::invalid_argument("anytime: evaluations and best, or hits and hit_best, differ in length");
     }
@@ -219,12 +230,23 @@ json to_json(const ExperimentInfo& info) {
             {"published", published_json(info.published)}};
     if (info.shard) out["shard"] = {{"index", info.shard->index}, {"count", info.shard->count}};
     if (info.evaluations_per_dimension > 0) out["budget"]["evaluations_per_dimension"] = info.evaluations_per_dimension;
+    if (!info.evaluations_by_dimension.empty()) {
+        json by_dimension = json::object();
+        for (const auto& [d, e] : info.evaluations_by_dimension) by_dimension[std::to_string(d)] = e;
+        out["budget"]["evaluations_by_dimension"] = by_dimension;
+    }
+    if (info.error_threshold > 0) out["error_threshold"] = info.error_threshold;
+    if (info.selected_dimension > 0) out["selected_dimension"] = info.selected_dimension;
     if (info.anytime)
         out["anytime"] = {{"targets", info.anytime->targets},
                           {"ert_targets", info.anytime->ert_targets},
                           {"points_per_decade", info.anytime->points_per_decade},
                           {"bootstrap", info.anytime->bootstrap},
                           {"iteration_trace", info.anytime->iteration_trace}};
+    if (info.anytime && (!info.anytime->checkpoints.empty() || !info.anytime->checkpoint_exponents.empty()))
+        out["anytime"]["checkpoints"] = {{"fractions", info.anytime->checkpoints},
+                                         {"rule", info.anytime->checkpoints_rule},
+                                         {"dimension_exponents", info.anytime->checkpoint_exponents}};
     return out;
 }
 
@@ -247,12 +269,22 @@ ExperimentInfo experiment_from_json(const json& j) {
         info.anytime = AnytimeSpec{a.at("targets").get<std::vector<double>>(), a.at("ert_targets").get<std::vector<double>>(),
                                    a.at("points_per_decade").get<int>(), a.at("bootstrap").get<int>(),
                                    a.value("iteration_trace", true)};
+        if (a.contains("checkpoints")) {
+            const auto& c = a["checkpoints"];
+            info.anytime->checkpoints = c.at("fractions").get<std::vector<double>>();
+            info.anytime->checkpoints_rule = c.value("rule", "");
+            info.anytime->checkpoint_exponents = c.value("dimension_exponents", std::vector<double>{});
+        }
     }
     info.trials = j.at("trials");
     info.seed = j.at("seed");
     info.budget.max_iterations = j.at("budget").at("iterations");
     info.budget.max_evaluations = j.at("budget").at("evaluations");
     info.evaluations_per_dimension = j.at("budget").value("evaluations_per_dimension", std::int64_t{0});
+    if (j.at("budget").contains("evaluations_by_dimension"))
+        for (const auto& [d, e] : j["budget"]["evaluations_by_dimension"].items()) info.evaluations_by_dimension[std::stoi(d)] = e.get<std::int64_t>();
+    info.error_threshold = j.value("error_threshold", 0.0);
+    info.selected_dimension = j.value("selected_dimension", 0);
     for (const auto& o : j.at("optimizers")) info.optimizers.push_back(variant_from(o));
     for (const auto& p : j.at("problems")) {
         ProblemInfo pi;

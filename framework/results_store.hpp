@@ -54,6 +54,9 @@ struct ExperimentInfo {
     std::uint64_t seed = 0;
     Budget budget;
     std::int64_t evaluations_per_dimension = 0;  // see ExperimentSpec
+    std::map<int, std::int64_t> evaluations_by_dimension;  // see ExperimentSpec
+    double error_threshold = 0;                  // see ExperimentSpec
+    int selected_dimension = 0;                  // see ExperimentSpec
     std::vector<PluginVariant> optimizers;
     std::vector<ProblemInfo> problems;
     std::string baseline;

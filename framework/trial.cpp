@@ -17,7 +17,8 @@ TrialRecord run_trial(Optimizer& optimizer, const Problem& problem, const TrialS
     Rng rng(setup.seed);
     std::optional<AnytimeRecorder> anytime;
     if (setup.anytime) {
-        anytime.emplace(*setup.anytime, setup.optimum);
+        anytime.emplace(*setup.anytime, setup.optimum,
+                        checkpoint_evaluations(*setup.anytime, problem.dimension(), setup.budget.max_evaluations));
         evaluator.record_anytime(&*anytime);
     }
 

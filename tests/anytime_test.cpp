@@ -55,6 +55,7 @@ TEST_CASE("a trial's anytime record equals the replay of every evaluation, for w
     AnytimeSpec spec;
     spec.targets = bbob_targets();
     spec.points_per_decade = 5;
+    spec.checkpoints = {0.01, 0.3, 0.999, 1.0};  // 25, 750, 2500 and 2503 of the budget of 2503
     // Odd population sizes and a budget that ends inside a population.
     for (const auto& [name, values] : std::vector<std::pair<std::string, std::map<std::string, ParameterValue>>>{
              {"random_search", {{"batch", std::int64_t{7}}}}, {"cmaes", {}}, {"isoa", {}}}) {
@@ -94,6 +95,9 @@ TEST_CASE("a trial's anytime record equals the replay of every evaluation, for w
         for (std::size_t c = 0; c < rec.anytime.evaluations.size(); ++c)
             CHECK(rec.anytime.best[c] == best_after[static_cast<std::size_t>(rec.anytime.evaluations[c] - 1)]);
         CHECK(rec.anytime.evaluations.back() == 1585);  // the last checkpoint within 2503
+        REQUIRE(rec.anytime.checkpoint_evaluations == std::vector<std::int64_t>{25, 750, 2500, 2503});
+        for (std::size_t c = 0; c < 4; ++c)
+            CHECK(rec.anytime.checkpoint_best[c] == best_after[static_cast<std::size_t>(rec.anytime.checkpoint_evaluations[c] - 1)]);
 
         // Without the per-iteration trace: the same anytime record, and the final state as the trace.
         testing::RecordingSphere again_problem(4, -5.0, 5.0, 1.5);
@@ -112,10 +116,33 @@ TEST_CASE("a trial's anytime record equals the replay of every evaluation, for w
         CHECK(again.anytime.evaluations == rec.anytime.evaluations);
         CHECK(again.anytime.best == rec.anytime.best);
         CHECK(again.anytime.hits == rec.anytime.hits);
+        CHECK(again.anytime.checkpoint_evaluations == rec.anytime.checkpoint_evaluations);
+        CHECK(again.anytime.checkpoint_best == rec.anytime.checkpoint_best);
         for (std::size_t t = 0; t < rec.anytime.hit_best.size(); ++t)
             CHECK((again.anytime.hit_best[t] == rec.anytime.hit_best[t] ||
                    (std::isnan(again.anytime.hit_best[t]) && std::isnan(rec.anytime.hit_best[t]))));
     }
+}
+
+TEST_CASE("the budget's checkpoints: the CEC 2017 and CEC 2022 rules as their reports state them", "[anytime]") {
+    AnytimeSpec spec;
+    REQUIRE(set_named_checkpoints(spec, "cec2017"));
+    // Awad et al. 2016, 2.2: (0.01, 0.02, 0.03, 0.05, 0.1, 0.2, ..., 1.0) x MaxFES; MaxFES = 10000 D.
+    CHECK(checkpoint_evaluations(spec, 10, 100000) ==
+          std::vector<std::int64_t>{1000, 2000, 3000, 5000, 10000, 20000, 30000, 40000, 50000, 60000, 70000, 80000, 90000, 100000});
+    REQUIRE(set_named_checkpoints(spec, "cec2022"));
+    // Kumar et al. 2021, 2.2: floor(D^(k/5 - 3) MaxFES), k = 0..15 (the report's example at D = 10
+    // names 200 000 / 10 = 20 000 as k = 10); the values below are that formula worked out apart.
+    CHECK(checkpoint_evaluations(spec, 10, 200000) == std::vector<std::int64_t>{200, 316, 502, 796, 1261, 2000, 3169, 5023, 7962, 12619,
+                                                                                20000, 31697, 50237, 79621, 126191, 200000});
+    CHECK(checkpoint_evaluations(spec, 20, 1000000) == std::vector<std::int64_t>{125, 227, 414, 754, 1373, 2500, 4551, 8286, 15085,
+                                                                                 27464, 50000, 91028, 165722, 301708, 549280, 1000000});
+    CHECK_FALSE(set_named_checkpoints(spec, "cec2014"));
+    // A small budget: counts of at least 1, each once.
+    AnytimeSpec fractions;
+    fractions.checkpoints = {0.001, 0.002, 0.5, 1.0};
+    CHECK(checkpoint_evaluations(fractions, 3, 100) == std::vector<std::int64_t>{1, 50, 100});
+    CHECK(checkpoint_evaluations(fractions, 3, 0).empty());  // no evaluation budget, no checkpoints
 }
 
 TEST_CASE("[anytime] in a config: defaults, lists, and refusals that name the line", "[anytime][config]") {
@@ -154,4 +181,17 @@ TEST_CASE("[anytime] in a config: defaults, lists, and refusals that name the li
                Catch::Contains("a.toml:5: anytime.ert_targets: 0.1 is not among anytime.targets"));
     CHECK_THAT(error("[anytime]\npoints_per_decade = 1000\n"), Catch::Contains("anytime.points_per_decade: must be <= 100"));
     CHECK_THAT(error("[anytime]\nevery = 3\n"), Catch::Contains("a.toml:4: anytime.every: unknown key"));
+
+    CHECK(load("[anytime]\ncheckpoints = [1, 0.5, 0.5]\n").anytime->checkpoints == std::vector<double>{0.5, 1.0});
+    const auto cec = load("[anytime]\ncheckpoints = \"cec2022\"\n").anytime;
+    CHECK(cec->checkpoints_rule == "cec2022");
+    CHECK(cec->checkpoint_exponents.size() == 16);
+    CHECK_THAT(error("[anytime]\ncheckpoints = [0.5, 1.5]\n"),
+               Catch::Contains("a.toml:4: anytime.checkpoints: expects \"cec2017\", \"cec2022\" or a list of fractions"));
+    CHECK_THAT(error("[anytime]\ncheckpoints = \"cec2014\"\n"), Catch::Contains("a.toml:4: anytime.checkpoints: expects"));
+    CHECK_THAT(error("[anytime]\ncheckpoints = []\n"), Catch::Contains("a.toml:4: anytime.checkpoints: expects"));
+    const auto iterations_only = dir.write("i.toml", head + "[anytime]\ncheckpoints = [1]\n[budget]\niterations = 10\n"
+                                                           "[[optimizer]]\nname = \"random_search\"\n[[problem]]\nname = \"test_sphere\"\n");
+    CHECK_THROWS_WITH(load_experiment(iterations_only),
+                      Catch::Contains("i.toml:4: anytime.checkpoints: are fractions of the evaluation budget"));
 }

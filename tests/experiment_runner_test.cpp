@@ -1,10 +1,12 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <fstream>
 
 #include "framework/experiment_runner.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
+#include "framework/report_tables.hpp"
 #include "tests/same_results.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -17,6 +19,15 @@ std::string config(const std::string& optimizers, const std::string& problems, i
 }
 const std::string two_optimizers = "[[optimizer]]\nname = \"random_search\"\nbatch = [4, 16]\n";
 const std::string two_problems = "[[problem]]\nname = \"test_sphere\"\ndimension = [2, 5]\n";
+
+// Runs the config `body` (written to dir/e.toml) into dir/out without a progress line; its records.
+std::vector<TrialRecord> run_quietly(const testing::TemporaryDirectory& dir, const std::string& body) {
+    RunOptions options;
+    options.output = dir.path() / "out";
+    options.progress = false;
+    run_experiment(load_experiment(dir.write("e.toml", body)), options);
+    return read_results(dir.path() / "out" / "results.jsonl").records;
+}
 
 }  // namespace
 
@@ -237,12 +248,7 @@ TEST_CASE("a full disk stops the run with a message naming the results file", "[
 TEST_CASE("a budget per dimension gives each problem its dimension times the evaluations, as COCO's do", "[experiment_runner]") {
     testing::TemporaryDirectory dir;
     const std::string body = "name = \"d\"\ntrials = 2\nseed = 4\n[budget]\nevaluations_per_dimension = 30\n" + two_optimizers + two_problems;
-    const auto spec = load_experiment(dir.write("e.toml", body));
-    RunOptions options;
-    options.output = dir.path() / "out";
-    options.progress = false;
-    run_experiment(spec, options);
-    const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
+    const auto records = run_quietly(dir, body);
     REQUIRE(records.size() == 8);
     for (const auto& r : records) CHECK(r.evaluations == (r.problem == "test_sphere(dimension=2)" ? 60 : 150));
     CHECK(read_experiment_info(dir.path() / "out").evaluations_per_dimension == 30);
@@ -251,4 +257,104 @@ TEST_CASE("a budget per dimension gives each problem its dimension times the eva
                                                  two_optimizers + two_problems);
     CHECK_THROWS_WITH(load_experiment(both), Catch::Contains("both.toml:5: budget.evaluations_per_dimension: set evaluations or "
                                                              "evaluations_per_dimension, not both"));
+}
+
+TEST_CASE("a budget by dimension gives each problem the evaluations listed for its dimension", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const std::string body = "name = \"d\"\ntrials = 2\nseed = 4\n[budget]\nevaluations_by_dimension = { 2 = 40, 5 = 96 }\n" +
+                             two_optimizers + two_problems;
+    const auto records = run_quietly(dir, body);
+    REQUIRE(records.size() == 8);
+    for (const auto& r : records) CHECK(r.evaluations == (r.problem == "test_sphere(dimension=2)" ? 40 : 96));
+    CHECK(read_experiment_info(dir.path() / "out").evaluations_by_dimension == std::map<int, std::int64_t>{{2, 40}, {5, 96}});
+    CHECK_THAT(markdown_report(read_experiment_info(dir.path() / "out"), records), Catch::Contains("40 at D = 2, 96 at D = 5"));
+
+    auto error = [&](const std::string& budget) -> std::string {
+        try {
+            describe_experiment(load_experiment(dir.write("b.toml", "trials = 1\nseed = 1\n[budget]\n" + budget + two_optimizers + two_problems)));
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "(accepted)";
+    };
+    CHECK_THAT(error("evaluations_by_dimension = { 2 = 40 }\n"),
+               Catch::Contains("b.toml:8: problem test_sphere(dimension=5): has dimension 5, for which budget.evaluations_by_dimension "
+                               "(line 4) gives no budget"));
+    CHECK_THAT(error("evaluations_by_dimension = { two = 40 }\n"),
+               Catch::Contains("b.toml:4: budget.evaluations_by_dimension.two: a key must be a dimension"));
+    CHECK_THAT(error("evaluations_by_dimension = { 2 = 0 }\n"),
+               Catch::Contains("b.toml:4: budget.evaluations_by_dimension.2: expects a whole number of evaluations from 1"));
+    CHECK_THAT(error("evaluations_by_dimension = 40\n"), Catch::Contains("b.toml:4: budget.evaluations_by_dimension: expects a table"));
+    CHECK_THAT(error("evaluations = 10\nevaluations_by_dimension = { 2 = 40 }\n"),
+               Catch::Contains("b.toml:5: budget.evaluations_by_dimension: set one of evaluations"));
+}
+
+TEST_CASE("an error threshold reports errors below it as 0 in the tables, and checkpoints get their table", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    // CMA-ES ends a 2-D sphere far below 1e-8 (but not at 0); random search stays far above it.
+    const std::string common = "trials = 4\nseed = 11\n[budget]\nevaluations = 600\n[anytime]\ncheckpoints = [0.1, 1]\n"
+                               "[[optimizer]]\nname = \"cmaes\"\n[[optimizer]]\nname = \"random_search\"\n"
+                               "[[problem]]\nname = \"test_sphere\"\ndimension = 2\n";
+    const auto with = load_experiment(dir.write("t.toml", common + "[analysis]\nerror_threshold = 1e-8\n"));
+    const auto without = load_experiment(dir.write("u.toml", common));
+    CHECK(with.error_threshold == 1e-8);
+    RunOptions options;
+    options.progress = false;
+    options.output = dir.path() / "with";
+    run_experiment(with, options);
+    options.output = dir.path() / "without";
+    run_experiment(without, options);
+    const auto info = read_experiment_info(dir.path() / "with");
+    CHECK(info.error_threshold == 1e-8);
+    const auto records = read_results(dir.path() / "with" / "results.jsonl").records;
+    double cmaes_largest = 0, random_smallest = INFINITY;
+    for (const auto& r : records) {
+        REQUIRE(r.anytime.checkpoint_evaluations == std::vector<std::int64_t>{60, 600});
+        CHECK(r.anytime.checkpoint_best.back() == r.best_fitness);
+        if (r.optimizer == "cmaes") cmaes_largest = std::max(cmaes_largest, r.best_fitness);
+        else random_smallest = std::min(random_smallest, r.best_fitness);
+    }
+    REQUIRE(cmaes_largest > 0);  // the raw errors are not 0: only the threshold makes them so
+    REQUIRE(cmaes_largest < 1e-8);
+    REQUIRE(random_smallest > 1e-8);
+    const auto table = results_table(info, records);
+    const auto plain = results_table(read_experiment_info(dir.path() / "without"), read_results(dir.path() / "without" / "results.jsonl").records);
+    const auto csv_with = csv(table), csv_without = csv(plain);
+    CHECK_THAT(csv_with, Catch::Contains("test_sphere(dimension=2),cmaes,4,0,0,0,0,0,0,"));
+    CHECK_THAT(csv_without, !Catch::Contains("test_sphere(dimension=2),cmaes,4,0,0,0,0,0,0,"));
+    const std::string md = markdown_report(info, records);
+    CHECK_THAT(md, Catch::Contains("Errors f − f* below 1e-08 are counted as 0"));
+    CHECK_THAT(md, Catch::Contains("error f − f* at the budget's checkpoints") && Catch::Contains("| 60 | 600 |"));
+
+    const auto no_optimum = dir.write("n.toml", "trials = 1\nseed = 1\n[budget]\nevaluations = 10\n[analysis]\nerror_threshold = 1e-8\n"
+                                                "[[optimizer]]\nname = \"random_search\"\n[[problem]]\nname = \"test_nan\"\n");
+    CHECK_THROWS_WITH(describe_experiment(load_experiment(no_optimum)),
+                      Catch::Contains("n.toml:9: problem test_nan: does not know its optimum f*, which analysis.error_threshold needs (line 6)"));
+    CHECK_THROWS_WITH(load_experiment(dir.write("m.toml", common + "[analysis]\nerror_threshold = -1\n")),
+                      Catch::Contains("m.toml:15: analysis.error_threshold: expects a number >= 0"));
+}
+
+TEST_CASE("run with --dimension D runs the config's problems of dimension D and says so in the results", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    auto spec = load_experiment(dir.write("e.toml", config(two_optimizers, two_problems, 2)));
+    select_dimension(spec, 5);
+    REQUIRE(spec.problems.size() == 1);
+    CHECK(spec.problems[0].label == "test_sphere(dimension=5)");
+    RunOptions options;
+    options.progress = false;
+    options.output = dir.path() / "out";
+    run_experiment(spec, options);
+    const auto info = read_experiment_info(dir.path() / "out");
+    CHECK(info.selected_dimension == 5);
+    CHECK(info.problems.size() == 1);
+    const auto records = read_results(dir.path() / "out" / "results.jsonl").records;
+    CHECK(records.size() == 4);
+    CHECK_THAT(markdown_report(info, records), Catch::Contains("Only the config's problems of dimension 5 were run"));
+
+    // Resuming without the selection would mix two experiments.
+    auto all = load_experiment(dir.path() / "e.toml");
+    options.resume = true;
+    CHECK_THROWS_WITH(run_experiment(all, options), Catch::Contains("--dimension") && Catch::Contains("selected dimension 5"));
+    auto none = load_experiment(dir.path() / "e.toml");
+    CHECK_THROWS_WITH(select_dimension(none, 7), Catch::Contains("--dimension: no problem of") && Catch::Contains("has dimension 7; its dimensions are 2, 5"));
 }

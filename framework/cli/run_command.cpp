@@ -1,4 +1,4 @@
-// `mhbench run FILE [--threads N] [--out DIR] [--resume] [--shard K/N]`, `mhbench table DIR` and
+// `mhbench run FILE [--threads N] [--out DIR] [--resume] [--shard K/N] [--dimension D]`, `mhbench table DIR` and
 // `mhbench merge DIR... [--out DIR]`.
 #include <cstdio>
 #include <memory>
@@ -75,7 +75,7 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
     auto* cmd = app.add_subcommand("run", "Run an experiment described in a TOML file; write results, tables and plots");
     struct Args {
         std::string file, out, shard;
-        int threads = 0;
+        int threads = 0, dimension = 0;
         bool resume = false, no_plots = false, quiet = false;
     };
     auto a = std::make_shared<Args>();
@@ -86,11 +86,14 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
         ->check(shard_format());
     cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(whole_number_in(1, 4096));
     cmd->add_option("--out", a->out, "output directory (default: the config's `output`)");
+    cmd->add_option("--dimension", a->dimension, "run only the config's problems of this dimension (recorded with the results)")
+        ->check(whole_number_in(1, 100000));
     cmd->add_flag("--resume", a->resume, "keep the trials already in the output's results.jsonl and run only the missing ones");
     cmd->add_flag("--no-plots", a->no_plots, "write tables only");
     cmd->add_flag("--quiet", a->quiet, "do not print the tables");
     auto action = [a]() -> int {
-        const auto spec = load_experiment(a->file);
+        auto spec = load_experiment(a->file);
+        if (a->dimension > 0) select_dimension(spec, a->dimension);
         RunOptions options;
         options.threads = a->threads;
         options.resume = a->resume;
