@@ -15,6 +15,7 @@
 
 #include "framework/cli/commands.hpp"
 #include "framework/cli/option_ranges.hpp"
+#include "framework/cli/problem_option.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 
@@ -62,8 +63,10 @@ std::vector<double> parse_point(std::string line, const std::string& source, lon
     return numbers;
 }
 
-std::unique_ptr<Problem> problem_of(const std::string& name, std::optional<std::int64_t> dimension,
-                                    std::optional<std::int64_t> instance) {
+}  // namespace
+
+std::unique_ptr<Problem> problem_from_command_line(const std::string& name, std::optional<std::int64_t> dimension,
+                                                   std::optional<std::int64_t> instance) {
     const auto& entry = ProblemRegistry::instance().at(name, "problem");
     auto declares = [&](const std::string& parameter) {
         for (const auto& p : entry.parameters)
@@ -90,9 +93,11 @@ std::unique_ptr<Problem> problem_of(const std::string& name, std::optional<std::
     return problem;
 }
 
+namespace {
+
 int evaluate_points(const std::string& name, std::optional<std::int64_t> dimension, std::optional<std::int64_t> instance,
                     const std::string& points) {
-    const auto problem = problem_of(name, dimension, instance);
+    const auto problem = problem_from_command_line(name, dimension, instance);
     const int d = problem->dimension();
     std::ifstream file;
     if (points != "-") {
