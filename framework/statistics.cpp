@@ -37,6 +37,19 @@ double quantile(std::vector<double> values, double p) {
     return values[lo] + (h - static_cast<double>(lo)) * (values[hi] - values[lo]);
 }
 
+std::vector<double> holm_adjusted(std::span<const double> p) {
+    std::vector<std::size_t> order(p.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
+    std::vector<double> adjusted(p.size());
+    double running = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        running = std::max(running, std::min(1.0, static_cast<double>(p.size() - i) * p[order[i]]));
+        adjusted[order[i]] = running;
+    }
+    return adjusted;
+}
+
 std::vector<double> average_ranks(std::span<const double> values) {
     const std::size_t n = values.size();
     std::vector<std::size_t> order(n);

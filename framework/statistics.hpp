@@ -31,6 +31,11 @@ RankSumResult wilcoxon_rank_sum(std::span<const double> a, std::span<const doubl
 double vargha_delaney_a12(std::span<const double> a, std::span<const double> b);
 const char* a12_magnitude(double a12);  // "negligible", "small", "medium", "large"
 
+// Holm's step-down adjustment of m p-values for multiple comparisons (Holm 1979): the i-th smallest
+// becomes max over j <= i of min(1, (m - j + 1) p_(j)); returned in the order given. Rejecting where
+// the adjusted p < alpha keeps the family-wise error rate at alpha.
+std::vector<double> holm_adjusted(std::span<const double> p);
+
 struct FriedmanResult {
     std::vector<double> mean_ranks;  // per algorithm, rank 1 = best (lowest)
     double chi_square = 0;

@@ -56,6 +56,21 @@ TEST_CASE("rank-sum test: normal approximation with ties", "[statistics]") {
     REQUIRE(wilcoxon_rank_sum(same, same).p == 1.0);
 }
 
+TEST_CASE("Holm's adjustment, worked by hand and as R's p.adjust gives it", "[statistics]") {
+    // Sorted 0.005, 0.01, 0.03, 0.04 times 4, 3, 2, 1: 0.02, 0.03, 0.06, 0.04 -> running maximum 0.06.
+    const std::vector<double> p{0.01, 0.04, 0.03, 0.005};
+    const auto adjusted = holm_adjusted(p);
+    REQUIRE(adjusted.size() == 4);
+    CHECK(adjusted[0] == Approx(0.03));
+    CHECK(adjusted[1] == Approx(0.06));
+    CHECK(adjusted[2] == Approx(0.06));
+    CHECK(adjusted[3] == Approx(0.02));
+    // Capped at 1: p.adjust(c(0.5, 0.6), "holm") = 1, 1.
+    const std::vector<double> large{0.5, 0.6};
+    CHECK(holm_adjusted(large) == std::vector<double>{1.0, 1.0});
+    CHECK(holm_adjusted(std::vector<double>{}).empty());
+}
+
 TEST_CASE("Vargha-Delaney A12", "[statistics]") {
     std::vector<double> a{1, 2}, b{2, 3};
     REQUIRE(vargha_delaney_a12(a, b) == Approx(0.875));  // 1<2, 1<3, 2=2 (1/2), 2<3
