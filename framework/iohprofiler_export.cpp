@@ -165,7 +165,8 @@ struct Row {
 };
 
 // The run as IOHanalyzer's .dat holds it: the rows where the best-so-far improved, from every exact
-// (evaluation, best-so-far) pair the record has (per-iteration trace, anytime checkpoints, target hits),
+// (evaluation, best-so-far) pair the record has (per-iteration trace, anytime checkpoints, target hits,
+// the budget's checkpoints),
 // closed by a row at the run's last evaluation. Fixed-target runtimes read off these rows are exact
 // for the recorded targets, because each hit is a row of its own.
 std::vector<Row> run_rows(const ProblemInfo& problem, const TrialRecord& record) {
@@ -177,6 +178,8 @@ std::vector<Row> run_rows(const ProblemInfo& problem, const TrialRecord& record)
         events.push_back({record.anytime.evaluations[c], exported_value(problem, record.anytime.best[c])});
     for (std::size_t t = 0; t < record.anytime.hits.size(); ++t)
         if (record.anytime.hits[t] > 0) events.push_back({record.anytime.hits[t], exported_value(problem, record.anytime.hit_best[t])});
+    for (std::size_t c = 0; c < record.anytime.checkpoint_evaluations.size() && c < record.anytime.checkpoint_best.size(); ++c)
+        events.push_back({record.anytime.checkpoint_evaluations[c], exported_value(problem, record.anytime.checkpoint_best[c])});
     events.push_back({record.evaluations, exported_value(problem, record.best_fitness)});
     std::sort(events.begin(), events.end(), [](const Row& a, const Row& b) {
         return a.evaluations != b.evaluations ? a.evaluations < b.evaluations : a.value < b.value;

@@ -134,6 +134,8 @@ void check_block(const Block& block, const TrialRecord& trial, double optimum, c
     if (!anytime) return;
     for (std::size_t c = 0; c < trial.anytime.evaluations.size(); ++c)
         CHECK(value_at(block, trial.anytime.evaluations[c]) == trial.anytime.best[c] - optimum);
+    for (std::size_t c = 0; c < trial.anytime.checkpoint_evaluations.size(); ++c)
+        CHECK(value_at(block, trial.anytime.checkpoint_evaluations[c]) == trial.anytime.checkpoint_best[c] - optimum);
     REQUIRE(trial.anytime.hits.size() == anytime->targets.size());
     for (std::size_t t = 0; t < anytime->targets.size(); ++t) {
         INFO("target " << anytime->targets[t]);
@@ -169,7 +171,7 @@ TEST_CASE("an anytime experiment on BBOB instances exports one exact run block p
     // Batches of 16 put most target hits between two trace points: only the anytime hits make the
     // exported runtimes exact there.
     const auto config = dir.write("e.toml",
-                                  "name = \"ioh\"\ntrials = 3\nseed = 5\n[budget]\nevaluations = 400\n[anytime]\n"
+                                  "name = \"ioh\"\ntrials = 3\nseed = 5\n[budget]\nevaluations = 400\n[anytime]\ncheckpoints = [0.0125, 0.015, 0.0225, 0.0275, 0.0325, 0.035, 0.0375, 0.0425, 0.045, 0.0475, 0.0525, 0.055, 0.0575, 0.0625]\n"
                                   "[[optimizer]]\nname = \"random_search\"\nbatch = [4, 16]\n"
                                   "[[problem]]\nname = \"bbob_f1\"\ndimension = [2, 3]\ninstance = [1, 2]\n"
                                   "[[problem]]\nname = \"test_sphere\"\ndimension = 2\nshift = [1.5, 2.5]\n"
@@ -179,6 +181,10 @@ TEST_CASE("an anytime experiment on BBOB instances exports one exact run block p
     const auto info = read_experiment_info(dir.path() / "results");
     const auto records = read_results(dir.path() / "results" / "results.jsonl").records;
     REQUIRE(records.size() == 2 * 10 * 3);
+    // Early checkpoints off the trace's and the log-spaced points, where random search still improves often:
+    // only the checkpoints' own rows make the export exact there.
+    for (const auto& r : records)
+        REQUIRE(r.anytime.checkpoint_evaluations == std::vector<std::int64_t>{5, 6, 9, 11, 13, 14, 15, 17, 18, 19, 21, 22, 23, 25});
 
     const fs::path out = dir.path() / "ioh";
     const auto summary = export_iohprofiler(dir.path() / "results", out);
