@@ -133,7 +133,7 @@ const bool complexity_registered = register_command("complexity", [](CLI::App& a
                    "one thread, its CPU time; mhbench {} (commit {}), {}, {}.\n\n",
                    a->evaluations, suite.problem, a->runs, machine.version, machine.commit, machine.host, machine.system);
         const double t0 = time_t0(suite.t0_iterations);
-        fmt::print("T0 = {:.4f} s ({} iterations of the reports' loop)\n\n", t0, suite.t0_iterations);
+        fmt::print("T0 = {:.6f} s ({} iterations of the reports' loop)\n\n", t0, suite.t0_iterations);
         fmt::print("| optimizer | D | T0 (s) | T1 (s) | T2 (s) | (T2 - T1)/T0 |\n|---|---|---|---|---|---|\n");
         for (const auto& problem : problems) {
             const double t1 = time_t1(*problem, a->evaluations, static_cast<Eigen::Index>(a->batch));
@@ -148,7 +148,7 @@ const bool complexity_registered = register_command("complexity", [](CLI::App& a
                     if (!record.ok) throw InputError("command line", 0, name, "the run failed: " + record.error);
                 }
                 const double t2 = total / static_cast<double>(a->runs);
-                fmt::print("| {} | {} | {:.4f} | {:.4f} | {:.4f} | {:.2f} |\n", name, problem->dimension(), t0, t1, t2, (t2 - t1) / t0);
+                fmt::print("| {} | {} | {:.6f} | {:.6f} | {:.6f} | {:.2f} |\n", name, problem->dimension(), t0, t1, t2, (t2 - t1) / t0);
                 std::fflush(stdout);
             }
         }
