@@ -209,7 +209,7 @@ PlotOutcome write_plots(const fs::path& directory, const ExperimentInfo& info, c
                                                              (at_checkpoints ? ", at the budget's checkpoints" : "")));
                 // The checkpoints of the CEC rules are spaced by ratios (D^(k/5-3)), or crowd the
                 // budget's first tenth (0.01, 0.02, 0.03, 0.05): a log axis shows them apart.
-                if (at_checkpoints) body += "set logscale x\nset format x '10^{%L}'\n";
+                if (at_checkpoints) body += "set logscale x\nset format x '10^{%L}'\nset autoscale xfix\n";
                 body += fmt::format("set ylabel {}\n", gnuplot_quote(std::string(shifted ? "f - f*" : "f") +
                                                                      (log_scale && non_positive ? " (values <= 0 drawn at the bottom)" : "")));
                 if (log_scale) body += "set logscale y\nset format y '10^{%L}'\n";
