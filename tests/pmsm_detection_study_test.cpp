@@ -60,6 +60,7 @@ TEST_CASE("a study file makes clean, single, pair, triple and outside cases with
     CHECK(triple.kind == "triple");
     CHECK(triple.truth == std::vector<std::string>{"deadtime", "psi_thermal", "rs_thermal"});
     CHECK(cases.back().outside);
+    CHECK(cases[1].sizes.at("deadtime").empty());  // not stated in this file
 
     // The case's profile: the study's settings and the seed merged into the profile, which the
     // simulator then reads with its own checks.
@@ -89,6 +90,13 @@ TEST_CASE("a bad study file is refused naming the file, line and field", "[pmsm]
     refused(study_text(profile_path(), "[[effect]]\nname = \"deadtiem\"\nclear = {}\nweak = {}\n"), "bad.toml:7: effect[0].name: ");
     refused(study_text(profile_path(), "pairs = [[\"deadtime\", \"delay\"]]\n" + deadtime), "pairs: 'delay' is not one of the study's [[effect]] names");
     refused(study_text(profile_path(), "[[effect]]\nname = \"delay\"\nclear = 3\nweak = {}\n"), "bad.toml:8: effect[0].clear: expects a table");
+    // A stated true size must name a parameter of its own effect, be a number, and have a case to belong to.
+    refused(study_text(profile_path(), "[[effect]]\nname = \"deadtime\"\nclear = {}\nweak = {}\nclear_size = { \"deadtime.volts\" = 0.28 }\n"),
+            "bad.toml:10: effect[0].clear_size.deadtime.volts: not a parameter of deadtime: one of deadtime.voltage, deadtime.current_band");
+    refused(study_text(profile_path(), "[[effect]]\nname = \"deadtime\"\nclear = {}\nweak = {}\nweak_size = { \"deadtime.voltage\" = \"a lot\" }\n"),
+            "effect[0].weak_size.deadtime.voltage: expects a finite number");
+    refused(study_text(profile_path(), "[[effect]]\nname = \"delay\"\nclear = {}\nweak_size = { \"delay.tau\" = 1e-5 }\n"),
+            "effect[0].weak_size: there is no near-limit case");
     // Two effects that set one profile key differently cannot make one drive.
     refused(study_text(profile_path(), "[[effect]]\nname = \"rs_thermal\"\nclear = { effects.rs_thermal = {}, temperature.winding = [[0.0, 25.0], [5.0, 30.0]] }\n"
                                        "weak = {}\n[[effect]]\nname = \"voltage_offset\"\n"

@@ -849,12 +849,22 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
     if (!record.ok) method += " [the optimiser failed: " + record.error + "]";
     // The optimiser's best, or the start when that is better (the start is a declared typical value).
     w.values = initial;
+    int polished_iterations = 0;  // before the final polish on all rows
     if (record.best_position.size() == k) {
         Eigen::VectorXd best = initial;
         for (std::size_t j = 0; j < searched.size(); ++j) best[searched[j]] = record.best_position[static_cast<Eigen::Index>(j)];
         if (!sample_projection) {
-            auto candidate = projection.workspace(best);
-            if (projection.project(candidate) < projection.project(w)) w.values = candidate.values;
+            // Both polished, as on a subsample below (the rows are few): a search that ends on the
+            // plateau where a dead-time band acts as a resistance would otherwise beat the start
+            // unpolished, and its polish would stay on the plateau.
+            const auto periodic = parameter_info(*model).periodic;
+            auto from_search = projection.workspace(best);
+            const Polished search_polish = polish(projection, *model, from_search, moving, periodic);
+            auto from_start = projection.workspace(initial);
+            const Polished start_polish = polish(projection, *model, from_start, moving, periodic);
+            const bool start_better = start_polish.rss < search_polish.rss;
+            w.values = start_better ? from_start.values : from_search.values;
+            polished_iterations = start_better ? start_polish.iterations : search_polish.iterations;
         } else {
             // On a subsample both are polished, where an iteration is cheap, and the better one goes
             // on: a search can miss a narrow valley (a dead-time band of milliamperes, in a box of
@@ -881,7 +891,9 @@ ModelFit fit_model(const Measurement& data, const ModelSpec& spec, const FitOpti
             w.values = best;
         }
     }
-    return finish(*model, spec, projection, w, moving, options, record.evaluations, method);
+    ModelFit fit = finish(*model, spec, projection, w, moving, options, record.evaluations, method);
+    fit.polish_iterations += polished_iterations;
+    return fit;
 }
 
 Eigen::VectorXd refine_parameters(const SteadyStateModel& model, const ModelSpec& spec, const Eigen::VectorXd& start) {

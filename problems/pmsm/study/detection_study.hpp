@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,10 @@ struct StudyEffect {
     std::string clear_as_written, weak_as_written;  // the same, as the study file writes them (for tables)
     bool in_combinations = true; // also in "all" pairs
     long line = 0;               // in the study file
+    // The true size of the effect in the model's own parameters ("deadtime.voltage" = 0.28), as the
+    // study's author knows it from the plant's settings; empty: not stated. A missed effect whose every
+    // stated size lies below the detection limit the diagnosis printed for it was "below the limit".
+    std::map<std::string, double> clear_size, weak_size;
 };
 
 struct StudyOutside {
@@ -77,6 +82,7 @@ struct StudyCase {
     std::vector<std::string> truth;     // library effects present (sorted)
     bool outside = false;               // an effect the library lacks is present
     std::string settings;               // merged settings, TOML text
+    std::map<std::string, std::map<std::string, double>> sizes;  // per effect present, its stated true sizes
 };
 
 std::vector<StudyCase> study_cases(const StudySpec& spec);
@@ -89,7 +95,17 @@ struct StudyRecord {
     bool correct = false;               // found == truth (and, with an outside effect, "not in the library" said)
     bool not_in_library = false;
     bool tie = false;
+    bool incomplete = false;            // recommended, and "something else is missing" said
+    bool intervals_valid = true;        // the diagnosis did not mark the recommended model's intervals not valid
     std::vector<std::string> false_positives, missed;
+    std::vector<DetectionLimit> missed_limits;  // the detection limits the diagnosis printed for the missed effects
+    // Missed effects whose every stated size is below the limit printed for it: the log could not show them.
+    std::vector<std::string> below_limit;
+    // Every effect missed is below its limit, nothing false was added and no "not in the library" was
+    // said (structure left means something above the noise): the answer is right for this log.
+    bool right_for_this_log() const {
+        return correct || (false_positives.empty() && !not_in_library && !missed.empty() && below_limit.size() == missed.size());
+    }
     Eigen::Vector4d base_error = Eigen::Vector4d::Zero();  // (fitted - true) / true of Rs, Ld, Lq, psi_f, recommended model
     // Whether the recommended model's 95 % interval of Rs, Ld, Lq, psi_f holds the true value: 1 yes,
     // 0 no, -1 no interval (the data do not determine it).
