@@ -2,6 +2,10 @@
 // refuses candidates outside the box.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <limits>
+#include <string>
+
 #include "framework/input_error.hpp"
 #include "framework/optimizer.hpp"
 #include "tests/sphere_fixture.hpp"
@@ -34,6 +38,63 @@ TEST_CASE("evaluator refuses candidates outside the box or not finite", "[evalua
     REQUIRE_THROWS_AS(ev.evaluate(x, f), PluginFault);
     x(1, 2) = std::nan("");
     REQUIRE_THROWS_AS(ev.evaluate(x, f), PluginFault);
+}
+
+TEST_CASE("evaluator refuses every kind of bad coordinate wherever it stands, and names the first", "[evaluator]") {
+    // D = 3: coordinates 1 and 2 are checked two at a time, coordinate 3 alone.
+    testing::ShiftedSphere sphere(3, -1, 1, 0.0);
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const double bad : {-1.5, 1.5, std::nan(""), inf, -inf}) {
+        for (Eigen::Index row = 0; row < 3; ++row) {
+            for (Eigen::Index column = 0; column < 4; ++column) {
+                Evaluator ev(sphere, Budget{10, 0});
+                Matrix x = Matrix::Constant(3, 4, 0.5);
+                x(row, column) = bad;
+                Vector f(4);
+                INFO("value " << bad << " at x" << row + 1 << " of candidate " << column);
+                try {
+                    ev.evaluate(x, f);
+                    FAIL("not refused");
+                } catch (const PluginFault& e) {
+                    const std::string what = e.what();
+                    REQUIRE_THAT(what, Catch::Contains("x" + std::to_string(row + 1)));
+                    REQUIRE_THAT(what, Catch::EndsWith("in candidate " + std::to_string(column)));
+                }
+                REQUIRE(ev.evaluations() == 0);
+            }
+        }
+    }
+    SECTION("the first bad coordinate, column by column, is the one named") {
+        Evaluator ev(sphere, Budget{10, 0});
+        Matrix x = Matrix::Zero(3, 3);
+        x(2, 1) = 2.0;
+        x(0, 2) = std::nan("");
+        Vector f(3);
+        REQUIRE_THROWS_WITH(ev.evaluate(x, f), "optimizer produced x3 = 2 outside [-1, 1] in candidate 1");
+    }
+    SECTION("the bounds themselves are inside") {
+        Evaluator ev(sphere, Budget{10, 0});
+        Matrix x(3, 2);
+        x << -1, 1, 1, -1, -1, 1;
+        Vector f(2);
+        REQUIRE(ev.evaluate(x, f) == 2);
+    }
+    SECTION("an infinity is refused even in an infinite box") {
+        testing::ShiftedSphere unbounded(3, -inf, inf, 0.0);
+        Evaluator ev(unbounded, Budget{10, 0});
+        Matrix x = Matrix::Zero(3, 2);
+        x(1, 1) = inf;
+        Vector f(2);
+        REQUIRE_THROWS_WITH(ev.evaluate(x, f), "optimizer produced a non-finite coordinate x2 = inf in candidate 1");
+    }
+    SECTION("columns past the budget are neither evaluated nor checked") {
+        Evaluator ev(sphere, Budget{0, 2});
+        Matrix x = Matrix::Zero(3, 3);
+        x(0, 2) = 5.0;
+        Vector f(3);
+        REQUIRE(ev.evaluate(x, f) == 2);
+        REQUIRE(std::isinf(f[2]));
+    }
 }
 
 TEST_CASE("progress fraction follows the budget kind", "[evaluator]") {
