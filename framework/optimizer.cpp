@@ -117,8 +117,15 @@ double Progress::fraction(std::int64_t offset) const {
 }
 
 void clamp_to_bounds(Eigen::Ref<Matrix> x, const Bounds& bounds) {
-    for (Eigen::Index i = 0; i < x.cols(); ++i)
-        x.col(i) = x.col(i).cwiseMax(bounds.lower).cwiseMin(bounds.upper);
+    // std::max then std::min is what Eigen's cwiseMax(lower).cwiseMin(upper) computes, NaN included
+    // (a NaN coordinate stays NaN), without building an expression per column.
+    const double* lower = bounds.lower.data();
+    const double* upper = bounds.upper.data();
+    const Eigen::Index d = x.rows();
+    for (Eigen::Index i = 0; i < x.cols(); ++i) {
+        double* column = x.data() + i * x.outerStride();
+        for (Eigen::Index j = 0; j < d; ++j) column[j] = std::min(std::max(column[j], lower[j]), upper[j]);
+    }
 }
 
 void fill_uniform(Eigen::Ref<Matrix> x, const Bounds& bounds, Rng& rng) {
