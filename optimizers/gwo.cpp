@@ -108,17 +108,27 @@ void GreyWolfOptimizer::iterate(const Progress& progress, Evaluator& evaluator, 
 }
 
 void GreyWolfOptimizer::hunt(Eigen::Index i, Rng& rng, Eigen::Ref<Vector> out) const {
+    // A = 2a r1 - a and C = 2 r2 with r = m 2^-53, m the generator's 53-bit integer (Rng::uniform).
+    // Scaling by a power of two is exact, so (2a 2^-53) m and 2^-52 m round exactly as 2a r1 and
+    // 2 r2 do: the same doubles with one multiplication fewer per draw. (2a 2^-53 stays a normal
+    // number: a is 0 or at least 2^-52.)
     const double a = a_;
-    for (Eigen::Index j = 0; j < positions_.rows(); ++j) {
-        const double x = positions_(j, i);
+    const double two_a_scaled = 2.0 * a * 0x1.0p-53;
+    constexpr double two_scaled = 0x1.0p-52;
+    const Eigen::Index d = positions_.rows();
+    const double* x = positions_.data() + i * d;
+    const double* alpha = leaders_.position.data();
+    const double* beta = alpha + d;
+    const double* delta = beta + d;
+    for (Eigen::Index j = 0; j < d; ++j) {
+        const double xj = x[j];
         double sum = 0.0;
-        for (Eigen::Index k = 0; k < 3; ++k) {
-            const double r1 = rng.uniform();
-            const double r2 = rng.uniform();
-            const double big_a = 2.0 * a * r1 - a;
-            const double big_c = 2.0 * r2;
-            const double leader = leaders_.position(j, k);
-            sum += leader - big_a * std::abs(big_c * leader - x);
+        for (const double leader : {alpha[j], beta[j], delta[j]}) {
+            const double m1 = static_cast<double>(rng() >> 11);
+            const double m2 = static_cast<double>(rng() >> 11);
+            const double big_a = two_a_scaled * m1 - a;
+            const double big_c = two_scaled * m2;
+            sum += leader - big_a * std::abs(big_c * leader - xj);
         }
         out[j] = sum / 3.0;
     }

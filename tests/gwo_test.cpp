@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -103,6 +104,40 @@ TEST_CASE("GWO.m's move is unconditional, and greedy_top3 never lets a wolf get 
         INFO(variant);
         if (variant == "greedy_top3") REQUIRE(worsened == 0);
         else REQUIRE(worsened > 0);
+    }
+}
+
+TEST_CASE("a GWO.m move is eq. (3.3)-(3.7) with uniform() draws, to the last bit", "[gwo]") {
+    // The hunt multiplies the generator's integers by pre-scaled constants; this is the textbook
+    // formula with r1 = rng.uniform(), r2 = rng.uniform() per wolf, coordinate and leader, which it
+    // must equal bit for bit, at every a of the schedule (2 down to 2/T).
+    testing::ShiftedSphere sphere(7, -10, 10, 2.0);
+    GreyWolfOptimizer gwo(12, GwoVariant::Original);
+    testing::ManualRun run(sphere, Budget{40, 0}, 3);
+    run.initialize(gwo);
+    for (int k = 0; k < 40; ++k) {
+        const Matrix before = gwo.positions();
+        const WolfLeaders leaders = gwo.leaders();
+        Rng replay = run.rng;
+        const double a = 2.0 - 2.0 * run.progress.fraction(-1);
+        Matrix expected(7, 12);
+        for (Eigen::Index i = 0; i < 12; ++i)
+            for (Eigen::Index j = 0; j < 7; ++j) {
+                double sum = 0.0;
+                for (Eigen::Index l = 0; l < 3; ++l) {
+                    const double r1 = replay.uniform();
+                    const double r2 = replay.uniform();
+                    const double big_a = 2.0 * a * r1 - a;
+                    const double big_c = 2.0 * r2;
+                    const double leader = leaders.position(j, l);
+                    sum += leader - big_a * std::abs(big_c * leader - before(j, i));
+                }
+                expected(j, i) = std::clamp(sum / 3.0, -10.0, 10.0);
+            }
+        run.iterate(gwo);
+        INFO("iteration " << k + 1 << ", a = " << a);
+        REQUIRE(gwo.a() == a);
+        REQUIRE(std::memcmp(gwo.positions().data(), expected.data(), sizeof(double) * 7 * 12) == 0);
     }
 }
 
