@@ -47,6 +47,43 @@ TEST_CASE("a corrupt line in the middle of a results file is bad input", "[resul
     }
 }
 
+TEST_CASE("many records read back in file order, an incomplete last line as a note and the first bad line by its number", "[results_store]") {
+    // Enough lines that the parallel parse splits them between threads.
+    testing::TemporaryDirectory dir;
+    std::string text;
+    for (int k = 0; k < 500; ++k) {
+        TrialRecord r;
+        r.trial = k;
+        r.best_fitness = 1.0 / (k + 1);
+        r.best_position = Vector::Constant(2, k);
+        text += to_json(r).dump() + "\n";
+    }
+    const std::string cut = text + R"({"optimizer":"gw)";
+    const auto loaded = read_results(dir.write("cut.jsonl", cut));
+    REQUIRE(loaded.records.size() == 500);
+    for (int k = 0; k < 500; ++k) {
+        REQUIRE(loaded.records[static_cast<std::size_t>(k)].trial == k);
+        REQUIRE(loaded.records[static_cast<std::size_t>(k)].best_fitness == 1.0 / (k + 1));
+    }
+    REQUIRE(loaded.notes.size() == 1);
+    REQUIRE_THAT(loaded.notes[0], Catch::Contains(":501: ignored an incomplete last line"));
+
+    // Bad lines at 401 and 101 (1-based), the cut line at the end: the error names line 101.
+    std::string bad;
+    int line = 0;
+    for (std::size_t start = 0; start < text.size(); ++line) {
+        const std::size_t end = text.find('\n', start);
+        bad += (line == 100 || line == 400) ? std::string("{not json\n") : text.substr(start, end - start + 1);
+        start = end + 1;
+    }
+    try {
+        read_results(dir.write("bad.jsonl", bad + R"({"optimizer":"gw)"));
+        FAIL("accepted");
+    } catch (const InputError& e) {
+        REQUIRE(e.line() == 101);
+    }
+}
+
 TEST_CASE("experiment.json from before the config text and provenance were recorded still reads", "[results_store]") {
     ExperimentInfo info;
     info.name = "old";

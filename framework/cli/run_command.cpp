@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <tbb/task_arena.h>
 
 #include "framework/cli/commands.hpp"
 #include "framework/cli/option_ranges.hpp"
@@ -125,7 +126,9 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
             summary = run_experiment(spec, options);
         }
         for (const auto& note : summary.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
-        publish(summary.output, !a->no_plots, a->quiet);
+        // The tables read the records back in parallel: on no more threads than the trials were given.
+        tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+        arena.execute([&] { publish(summary.output, !a->no_plots, a->quiet); });
         std::fprintf(stderr, "%zu trials run, %zu skipped (already done), %zu failed, in %.3f s wall time.\n", summary.ran,
                      summary.skipped, summary.failed, summary.seconds);
         if (options.shard)
