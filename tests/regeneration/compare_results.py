@@ -10,9 +10,10 @@ each job twice.
   tests/regeneration/compare_results.py --mhbench build/mhbench            # the CI subset
   tests/regeneration/compare_results.py --mhbench build/mhbench --all      # every committed result
 
-The subset (seconds on 2 cores) reruns Table 3, one case of each detection study and the tutorial's
-diagnosis; --all reruns every experiment and study (about 15 minutes on 2 cores, and about 12 more
-for results/cec2022 and 25 more for results/cec2017 as they were measured, docs/test-functions.md).
+The subset (about half a minute on 2 cores) reruns Table 3, the demo (every optimizer on classic and
+BBOB functions), one case of each detection study and the tutorial's diagnosis; --all reruns every
+experiment and study (about 15 minutes on 2 cores, and about 12 more for results/cec2022 and 25 more
+for results/cec2017 as they were measured, docs/test-functions.md).
 Exit 0 when everything matches, 1 with a list of differences, 2 on bad usage.
 """
 import argparse
@@ -203,7 +204,8 @@ def main():
     if args.all:
         jobs = experiment_jobs() + study_jobs()
     else:
-        jobs = [j for j in experiment_jobs() if j.name == "pmsm_table3"]
+        # Table 3 (GWO, SOA, ISOA on the PMSM) and the demo (every optimizer on classic and BBOB functions).
+        jobs = [j for j in experiment_jobs() if j.name in ("pmsm_table3", "demo")]
         jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal"})
     jobs += tutorial_jobs(program, scratch)
 
