@@ -384,6 +384,10 @@ RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, c
     const auto& done = prepared.done;
     const auto& shared = prepared.shared;
     const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    std::error_code size_error;
+    const bool fresh_file = !fs::exists(results_path, size_error) || fs::file_size(results_path, size_error) == 0;
+    std::vector<TrialRecord> kept;
+    std::vector<TrialRecord>* keep = options.keep_records && fresh_file && !size_error ? &kept : nullptr;
     ResultsWriter writer(results_path);
 
     struct Task {
@@ -446,7 +450,7 @@ RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, c
                     summary.failures.push_back(fmt::format("{} on {}, trial {}: {}", ov.label, pv.label, task.trial, record.error));
             }
             try {
-                writer.append(record);
+                writer.append(record, keep);
             } catch (...) {
                 writes_failed = true;
                 std::lock_guard lock(failures_mutex);
@@ -460,6 +464,7 @@ RunSummary run_prepared(const ExperimentSpec& spec, const RunOptions& options, c
     summary.ran = tasks.size();
     summary.failed = failed;
     summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (keep) summary.records = std::move(kept);
     return summary;
 }
 

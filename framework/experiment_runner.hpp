@@ -25,6 +25,8 @@ struct RunOptions {
     bool progress = true;                          // draw the progress line (when stderr is a terminal)
     // Run only this share of the trials; the output then defaults to <output>/shard-K-of-N.
     std::optional<Shard> shard;
+    // Keep the records in RunSummary::records when the results file holds this run's only.
+    bool keep_records = false;
 };
 
 struct RunSummary {
@@ -34,6 +36,10 @@ struct RunSummary {
     std::vector<std::string> failures;  // the first few, "optimizer on problem, trial k: reason"
     std::vector<std::string> notes;
     double seconds = 0;
+    // With RunOptions::keep_records, when the results file held nothing before this run: the records
+    // as written there, in its order, so that the tables need not read them back (trial_from_json
+    // gives back to_json's record bit for bit).
+    std::optional<std::vector<TrialRecord>> records;
 };
 
 // Resolves problem information (dimension, truth) by creating each problem once; InputError for

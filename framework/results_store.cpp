@@ -328,7 +328,7 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& path) : path_(path) {
                              "); choose another directory with --out");
 }
 
-void ResultsWriter::append(const TrialRecord& record) {
+void ResultsWriter::append(const TrialRecord& record, std::vector<TrialRecord>* kept) {
     const std::string line = to_json(record).dump() + "\n";
     std::lock_guard lock(mutex_);
     if (!out_) throw InputError(path_.string(), 0, "", "an earlier write to this file failed");
@@ -339,6 +339,7 @@ void ResultsWriter::append(const TrialRecord& record) {
         throw InputError(path_.string(), 0, "",
                          fmt::format("writing a trial record failed ({}); the records before it are kept: make room, "
                                      "then run again with --resume", errno ? std::strerror(errno) : "disk full?"));
+    if (kept) kept->push_back(record);
 }
 
 LoadedResults read_results(const std::filesystem::path& path) {

@@ -87,8 +87,9 @@ public:
     explicit ResultsWriter(const std::filesystem::path& path);
     // Thread-safe; flushed before it returns. A failed write (a full disk) is an InputError naming the
     // file; the records written before it stay readable (at worst the last line is cut short, which
-    // read_results reports and `--resume` reruns).
-    void append(const TrialRecord& record);
+    // read_results reports and `--resume` reruns). When `kept` is given the record is also added to
+    // it, in the file's order.
+    void append(const TrialRecord& record, std::vector<TrialRecord>* kept = nullptr);
 
 private:
     std::filesystem::path path_;

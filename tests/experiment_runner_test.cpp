@@ -50,6 +50,33 @@ TEST_CASE("results are bitwise identical on 1 and 2 threads", "[experiment_runne
     for (const auto& r : r1) REQUIRE(r.evaluations == (r.optimizer == "random_search(batch=4)" ? 4 * 16 : 16 * 16));
 }
 
+TEST_CASE("the records a run keeps for its tables are what its results file gives back, in its order", "[experiment_runner]") {
+    testing::TemporaryDirectory dir;
+    const auto spec = load_experiment(dir.write("e.toml", config(two_optimizers, two_problems)));
+    RunOptions o;
+    o.threads = 2;
+    o.output = dir.path() / "out";
+    o.keep_records = true;
+    const auto summary = run_experiment(spec, o);
+    REQUIRE(summary.records);
+    const auto& kept = *summary.records;
+    const auto file = read_results(dir.path() / "out" / "results.jsonl").records;
+    REQUIRE(kept.size() == 24);
+    REQUIRE(kept.size() == file.size());
+    require_same_results(kept, file);
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+        REQUIRE(to_json(kept[k]).dump() == to_json(file[k]).dump());
+        REQUIRE(kept[k].seconds == file[k].seconds);
+    }
+    // A file that held records before the run (resumed) is read back: nothing is kept.
+    o.resume = true;
+    REQUIRE_FALSE(run_experiment(spec, o).records);
+    // Nor without asking.
+    RunOptions plain;
+    plain.output = dir.path() / "plain";
+    REQUIRE_FALSE(run_experiment(spec, plain).records);
+}
+
 TEST_CASE("an interrupted run resumes without losing or repeating trials", "[experiment_runner]") {
     testing::TemporaryDirectory dir;
     const auto spec = load_experiment(dir.write("e.toml", config(two_optimizers, two_problems)));

@@ -26,18 +26,23 @@ namespace {
 namespace fs = std::filesystem;
 
 // Tables, plots and report.html from whatever the directory holds; prints table.md unless `quiet`.
-void publish(const fs::path& directory, bool plots, bool quiet) {
+// `records`: the run's own, when it has them (RunSummary::records); null: read from the directory.
+void publish(const fs::path& directory, bool plots, bool quiet, const std::vector<TrialRecord>* records = nullptr) {
     const auto info = read_experiment_info(directory);
-    auto loaded = read_results(directory / "results.jsonl");
+    LoadedResults loaded;
+    if (!records) {
+        loaded = read_results(directory / "results.jsonl");
+        records = &loaded.records;
+    }
     for (const auto& note : loaded.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
-    const Document report = write_tables(directory, info, loaded.records);
+    const Document report = write_tables(directory, info, *records);
     ExperimentPlots drawn;
     if (!plots) {
         drawn.absent_because = "No plots: they were not drawn (--no-plots).";
     } else if (!info.plots) {
         drawn.absent_because = "No plots: the experiment's config switches them off (plots = false).";
     } else {
-        const auto outcome = write_plots(directory, info, loaded.records);
+        const auto outcome = write_plots(directory, info, *records);
         for (const auto& note : outcome.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
         drawn.images = outcome.images;
         drawn.absent_because = outcome.notes.empty() ? "No plots: no trial has finished successfully."
@@ -123,12 +128,14 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
                                          launched_ranks()));
 #endif
         } else {
+            options.keep_records = true;  // for the tables below (a distributed run's rank 0 has its share only)
             summary = run_experiment(spec, options);
         }
         for (const auto& note : summary.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
-        // The tables read the records back in parallel: on no more threads than the trials were given.
+        // The tables, which read the records back in parallel when they must: on no more threads than
+        // the trials were given.
         tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-        arena.execute([&] { publish(summary.output, !a->no_plots, a->quiet); });
+        arena.execute([&] { publish(summary.output, !a->no_plots, a->quiet, summary.records ? &*summary.records : nullptr); });
         std::fprintf(stderr, "%zu trials run, %zu skipped (already done), %zu failed, in %.3f s wall time.\n", summary.ran,
                      summary.skipped, summary.failed, summary.seconds);
         if (options.shard)
