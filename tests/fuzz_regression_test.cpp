@@ -18,7 +18,6 @@ namespace {
 const fs::path regressions_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "regressions";
 // Valid files of every documented binary layout, which the binary fuzzers start from.
 const fs::path seeds_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "seeds";
-
 std::string file_bytes(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
     REQUIRE(in);
@@ -74,6 +73,12 @@ TEST_CASE("the bad inputs named in issue 12 are refused, not accepted", "[fuzz]"
 
 TEST_CASE("an experiment whose lists multiply into 10^8 variants is refused before they are expanded", "[fuzz]") {
     CHECK(verdict_on("experiment", "grid_of_10_pow_8_variants.toml") == Verdict::refused);
+}
+
+TEST_CASE("a MAT v7.3 number type declaring gigabytes a number is refused before libhdf5 allocates for one", "[fuzz]") {
+    // Found by fuzz_mat73 as out-of-memory: H5Dread converted through a buffer of one stored number.
+    CHECK(verdict_on("mat73", "u_q_floats_of_1.6_gb_each.mat") == Verdict::refused);
+    CHECK(verdict_on("mat73", "t_floats_of_4_gb_each.mat") == Verdict::refused);
 }
 
 TEST_CASE("every binary fuzzer seed, a valid file of a documented layout, is accepted", "[fuzz]") {

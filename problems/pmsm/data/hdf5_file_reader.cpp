@@ -234,6 +234,10 @@ bool Hdf5File::matlab_attribute_set(hid_t object, const char* name) const {
     const Handle attribute(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
     const Handle space(H5Aget_space(attribute.get()), H5Sclose);
     if (H5Sget_simple_extent_npoints(space.get()) != 1) return true;
+    // The library converts through a buffer of the stored type's size, which a damaged file may
+    // declare as gigabytes (found by fuzz_mat73); MATLAB writes these flags as 1-byte to 8-byte integers.
+    const Handle stored(H5Aget_type(attribute.get()), H5Tclose);
+    if (H5Tget_class(stored.get()) != H5T_INTEGER || H5Tget_size(stored.get()) == 0 || H5Tget_size(stored.get()) > 8) return true;
     unsigned long long value = 1;
     if (H5Aread(attribute.get(), H5T_NATIVE_ULLONG, &value) < 0) H5Eclear2(H5E_DEFAULT);
     return value != 0;
@@ -285,10 +289,17 @@ Hdf5File::Planned Hdf5File::plan(hid_t group, const Link& link, const std::strin
         p.rows = p.dims[1];
     } else if (matlab == "cell") {
         if (type_class != H5T_REFERENCE || !is_vector(p.dims)) refuse(p.field, fmt::format("a {} cell array, not a vector", shape(p.dims)));
+        if (H5Tequal(p.type.get(), H5T_STD_REF_OBJ) <= 0) refuse(p.field, "a cell array whose cells are not object references (the file is damaged)");
         p.kind = Kind::matlab_cells;
     } else if (type_class == H5T_INTEGER || type_class == H5T_FLOAT) {
         if (!is_vector(p.dims))
             refuse(p.field, fmt::format("a {} {}, not a vector", shape(p.dims), layout_ == Hdf5Layout::matlab ? "matrix" : "dataset"));
+        // The library converts to double through a buffer of at least one stored number, whose size a
+        // damaged type declares: fuzz_mat73 found numbers of 1.6 GB and 4 GB each, allocated by H5Dread.
+        const std::size_t number_bytes = H5Tget_size(p.type.get());
+        if (number_bytes == 0 || number_bytes > 8)
+            refuse(p.field, fmt::format("numbers of {} bytes each; mhbench reads integers and floats of 1 to 8 bytes (the file is damaged?)",
+                                        number_bytes));
         p.kind = Kind::numbers;
     } else if (type_class == H5T_STRING && layout_ == Hdf5Layout::plain) {
         if (!is_vector(p.dims)) refuse(p.field, fmt::format("a {} dataset, not a vector", shape(p.dims)));
