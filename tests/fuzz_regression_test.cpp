@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "framework/input_error.hpp"
+#include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/data/measurement_file_columns.hpp"
 #include "tests/fuzz/input_formats.hpp"
 #include "tests/measurement_file_writers.hpp"
 
@@ -18,6 +21,10 @@ namespace {
 const fs::path regressions_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "regressions";
 // Valid files of every documented binary layout, which the binary fuzzers start from.
 const fs::path seeds_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "seeds";
+// Inputs on which the fuzzers saw libhdf5 itself fault (docs/fuzzing.md, "Findings"). Not
+// regressions: read in this process, as the harnesses read, they would end the test program.
+const fs::path libhdf5_faults_directory = fs::path(MHBENCH_SOURCE_DIR) / "tests" / "fuzz" / "libhdf5_faults";
+
 std::string file_bytes(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
     REQUIRE(in);
@@ -79,6 +86,24 @@ TEST_CASE("a MAT v7.3 number type declaring gigabytes a number is refused before
     // Found by fuzz_mat73 as out-of-memory: H5Dread converted through a buffer of one stored number.
     CHECK(verdict_on("mat73", "u_q_floats_of_1.6_gb_each.mat") == Verdict::refused);
     CHECK(verdict_on("mat73", "t_floats_of_4_gb_each.mat") == Verdict::refused);
+}
+
+TEST_CASE("every input that made libhdf5 fault in a fuzzer is read or refused naming the file when read in a child process", "[fuzz]") {
+    // What mhbench does with such a file outside the fuzzers. A fault that ends the reading process
+    // is a refusal saying which file and that the library failed on it; an over-read that faults
+    // only under AddressSanitizer (attribute_message_overread.mat) may leave the read to finish.
+    std::size_t replayed = 0;
+    for (const auto& [format, as] : {std::pair{"mat73", mhb::pmsm::MeasurementFormat::Mat73}, std::pair{"hdf5", mhb::pmsm::MeasurementFormat::Hdf5}})
+        for (const auto& file : files_in(libhdf5_faults_directory / format)) {
+            INFO(file.string());
+            try {
+                mhb::pmsm::read_binary_measurement(file, as, {}, mhb::pmsm::Isolation::child_process);
+            } catch (const mhb::InputError& e) {
+                CHECK(e.file() == file.string());
+            }
+            ++replayed;
+        }
+    CHECK(replayed >= 2);
 }
 
 TEST_CASE("every binary fuzzer seed, a valid file of a documented layout, is accepted", "[fuzz]") {
