@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Runs one libFuzzer harness until it has executed RUNS inputs or SECONDS have passed, starting it
+# again from its grown corpus after each finding, and prints the total. libFuzzer stops at the first
+# crash, and the libhdf5 paths meet faults inside libhdf5 every few thousand inputs (docs/fuzzing.md,
+# "Findings"). libFuzzer's fork mode (-fork=1 -ignore_crashes=1) also goes on, but starts a process
+# per job that first replays its share of the corpus; here one process runs until it finds something.
+# Each finding is written to FINDINGS, named by the run it came from; triage them all (docs/fuzzing.md).
+#
+# usage: fuzz_until.sh FUZZER CORPUS FINDINGS RUNS SECONDS [libFuzzer options...]
+# e.g.   nice -n 19 tests/fuzz/fuzz_until.sh build-fuzz/fuzz/fuzz_hdf5 corpus/hdf5 findings/hdf5 10000000 3600 \
+#            -timeout=10 -rss_limit_mb=2048
+set -uo pipefail
+fuzzer="$(realpath "$1")" corpus="$2" findings="$3" runs="$4" seconds="$5"
+shift 5
+mkdir -p "$findings"
+start=$(date +%s)
+total=0
+segment=0
+while [ "$total" -lt "$runs" ]; do
+  left=$((seconds - ($(date +%s) - start)))
+  [ "$left" -le 0 ] && break
+  segment=$((segment + 1))
+  log="$findings/run-$segment.log"
+  # Artifacts go to FINDINGS with the run's number, so that no finding overwrites another.
+  "$fuzzer" "$corpus" -runs=$((runs - total)) -max_total_time="$left" -print_final_stats=1 \
+      -artifact_prefix="$findings/run-$segment-" "$@" >"$log" 2>&1
+  executed=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  total=$((total + ${executed:-0}))
+  finding=$(grep -m1 -E '^==[0-9]+== ?ERROR' "$log" || true)
+  echo "run $segment: ${executed:-0} inputs, total $total after $(($(date +%s) - start)) s${finding:+; $finding}"
+  # A run that ended without a finding and short of its inputs ran out of time; one that executed
+  # nothing cannot start (a broken build or corpus): stop rather than loop.
+  [ -z "$finding" ] && break
+  [ "${executed:-0}" -eq 0 ] && break
+done
+echo "total: $total inputs in $(($(date +%s) - start)) s"
