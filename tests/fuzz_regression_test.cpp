@@ -88,6 +88,11 @@ TEST_CASE("a MAT v7.3 number type declaring gigabytes a number is refused before
     CHECK(verdict_on("mat73", "t_floats_of_4_gb_each.mat") == Verdict::refused);
 }
 
+TEST_CASE("an HDF5 compact dataset holding fewer bytes than its shape and type take is refused before libhdf5 reads past them", "[fuzz]") {
+    // Found by fuzz_hdf5 as a heap-buffer-overflow in libhdf5's H5D__compact_readvv (48 bytes read from 8).
+    CHECK(verdict_on("hdf5", "t_compact_data_of_8_bytes_for_6_rows.h5") == Verdict::refused);
+}
+
 TEST_CASE("every input that made libhdf5 fault in a fuzzer is read or refused naming the file when read in a child process", "[fuzz]") {
     // What mhbench does with such a file outside the fuzzers: the reader in a child process with
     // limits. A fault that ends the child is a refusal saying which file and that the library
