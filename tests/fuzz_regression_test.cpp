@@ -93,6 +93,11 @@ TEST_CASE("an HDF5 compact dataset holding fewer bytes than its shape and type t
     CHECK(verdict_on("hdf5", "t_compact_data_of_8_bytes_for_6_rows.h5") == Verdict::refused);
 }
 
+TEST_CASE("an HDF5 integer whose significant bits lie outside it is refused before libhdf5 converts it", "[fuzz]") {
+    // Found by fuzz_hdf5 as a bus error in libhdf5's H5T__bit_copy: a 2-byte i_q whose bits start at bit 4096.
+    CHECK(verdict_on("hdf5", "i_q_int16_bits_at_4096.h5") == Verdict::refused);
+}
+
 TEST_CASE("every input that made libhdf5 fault in a fuzzer is read or refused naming the file when read in a child process", "[fuzz]") {
     // What mhbench does with such a file outside the fuzzers: the reader in a child process with
     // limits. A fault that ends the child is a refusal saying which file and that the library
