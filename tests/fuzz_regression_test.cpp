@@ -91,6 +91,8 @@ TEST_CASE("a MAT v7.3 number type declaring gigabytes a number is refused before
 TEST_CASE("an HDF5 compact dataset holding fewer bytes than its shape and type take is refused before libhdf5 reads past them", "[fuzz]") {
     // Found by fuzz_hdf5 as a heap-buffer-overflow in libhdf5's H5D__compact_readvv (48 bytes read from 8).
     CHECK(verdict_on("hdf5", "t_compact_data_of_8_bytes_for_6_rows.h5") == Verdict::refused);
+    // And a v7.3 cell's char array, read by its own H5Dread (fuzz_mat73: a segfault in H5VM_memcpyvv).
+    CHECK(verdict_on("mat73", "segment_cell_compact_chars_past_their_block.mat") == Verdict::refused);
 }
 
 TEST_CASE("an HDF5 integer whose significant bits lie outside it is refused before libhdf5 converts it", "[fuzz]") {

@@ -148,6 +148,7 @@ private:
     TextColumn read_matlab_chars(Planned& p) const;
     TextColumn read_matlab_cells(Planned& p) const;
     std::string matlab_text(hid_t object, const std::string& field, std::uint64_t row) const;
+    void check_compact_size(hid_t dataset, hid_t space, hid_t type, const std::string& field) const;
 
     std::filesystem::path path_;
     std::string file_;
@@ -243,6 +244,17 @@ bool Hdf5File::matlab_attribute_set(hid_t object, const char* name) const {
     return value != 0;
 }
 
+// Compact data lives in the object header, in a block of the size the header declares; libhdf5
+// 1.10.8 copies what the shape and type ask for out of it without comparing the two (fuzz_hdf5 and
+// fuzz_mat73: H5D__compact_readvv read past the block). The type's size is its size in memory, which
+// for variable-length strings is less than the file's, so no valid file is refused.
+void Hdf5File::check_compact_size(hid_t dataset, hid_t space, hid_t type, const std::string& field) const {
+    const hssize_t points = H5Sget_simple_extent_npoints(space);
+    const hsize_t needed = static_cast<hsize_t>(std::max<hssize_t>(points, 0)) * H5Tget_size(type);
+    const hsize_t held = H5Dget_storage_size(dataset);
+    if (held < needed) refuse(field, fmt::format("compact data of {} bytes where its shape and type take {} (the file is damaged)", held, needed));
+}
+
 Hdf5File::Planned Hdf5File::plan(hid_t group, const Link& link, const std::string& column, DeclaredRows& rows) const {
     Planned p;
     p.name = link.name;
@@ -326,17 +338,7 @@ Hdf5File::Planned Hdf5File::plan(hid_t group, const Link& link, const std::strin
     if (p.kind == Kind::strings && H5Tis_variable_str(p.type.get()) <= 0 && H5Tget_size(p.type.get()) > max_label_bytes)
         refuse(p.field, fmt::format("fixed-length strings of {} bytes; mhbench reads labels of at most {} bytes", H5Tget_size(p.type.get()),
                                     max_label_bytes));
-    // Compact data lives in the object header, in a block of the size the header declares;
-    // libhdf5 1.10.8 copies what the shape and type ask for out of it without comparing the two
-    // (fuzz_hdf5: H5D__compact_readvv read past the block). The type's size is its size in memory,
-    // which for variable-length strings is less than the file's, so no valid file is refused.
-    if (compact) {
-        const hssize_t points = H5Sget_simple_extent_npoints(p.space.get());
-        const hsize_t needed = static_cast<hsize_t>(std::max<hssize_t>(points, 0)) * H5Tget_size(p.type.get());
-        const hsize_t held = H5Dget_storage_size(dataset);
-        if (held < needed)
-            refuse(p.field, fmt::format("compact data of {} bytes where its shape and type take {} (the file is damaged)", held, needed));
-    }
+    if (compact) check_compact_size(dataset, p.space.get(), p.type.get(), p.field);
     // A dataset whose storage was never (fully) written reads as its fill value: zeros that the
     // file never held. Compact and contiguous storage is allocated whole or not at all.
     H5D_space_status_t status = H5D_SPACE_STATUS_ERROR;
@@ -428,6 +430,10 @@ std::string Hdf5File::matlab_text(hid_t object, const std::string& field, std::u
     if (dims[1] != 1) refuse_row(fmt::format("the cell holds a {}x{} char matrix, not one line of text", dims[1], dims[0]));
     if (dims[0] > max_label_bytes)
         refuse_row(fmt::format("a label of {} characters; mhbench reads labels of at most {} characters", dims[0], max_label_bytes));
+    {
+        const Handle creation(checked(H5Dget_create_plist(object), field, fmt::format("row {}: cannot read how the cell is stored", row)), H5Pclose);
+        if (H5Pget_layout(creation.get()) == H5D_COMPACT) check_compact_size(object, space.get(), type.get(), fmt::format("{}: row {}", field, row));
+    }
     TextColumn line;
     if (H5Tget_size(type.get()) == 1) {
         std::vector<std::uint8_t> bytes(dims[0]);
