@@ -331,14 +331,15 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& path) : path_(path) {
 void ResultsWriter::append(const TrialRecord& record, std::vector<TrialRecord>* kept) {
     const std::string line = to_json(record).dump() + "\n";
     std::lock_guard lock(mutex_);
-    if (!out_) throw InputError(path_.string(), 0, "", "an earlier write to this file failed");
+    if (!out_) throw InputError(path_.string(), 0, "", failure_.empty() ? std::string("an earlier write to this file failed") : failure_);
     errno = 0;
     out_ << line;
     out_.flush();
-    if (!out_)
-        throw InputError(path_.string(), 0, "",
-                         fmt::format("writing a trial record failed ({}); the records before it are kept: make room, "
-                                     "then run again with --resume", errno ? std::strerror(errno) : "disk full?"));
+    if (!out_) {
+        failure_ = fmt::format("writing a trial record failed ({}); the records before it are kept: make room, then run again with --resume",
+                               errno ? std::strerror(errno) : "disk full?");
+        throw InputError(path_.string(), 0, "", failure_);
+    }
     if (kept) kept->push_back(record);
 }
 

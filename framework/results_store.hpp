@@ -95,6 +95,9 @@ private:
     std::filesystem::path path_;
     std::ofstream out_;
     std::mutex mutex_;
+    // Why the first write failed: every later append says the same, so that whichever thread's
+    // exception a parallel run reports, it names the cause and the way out.
+    std::string failure_;
 };
 
 struct LoadedResults {
