@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """A clone of the repository must build and pass every test alone: nothing the build, the tests, the
 fuzz corpus, the experiments or CI read may point outside the checkout, in particular into the
-workplace's ../shared inputs (whose data the repository carries as copies, with their provenance).
+workplace's shared inputs beside it (whose data the repository carries as copies, with their
+provenance).
 
 Scans the source and configuration files that are read when building, testing or running (not the
-documentation, where ../shared is named as provenance) for a path that leaves the checkout through
-"shared/", and exits 1 naming each file and line, 0 when there is none.
+documentation, where the shared inputs are named as provenance) for a path that leaves the checkout
+into a "shared" directory, and exits 1 naming each file and line, 0 when there is none.
 """
 import pathlib
 import re

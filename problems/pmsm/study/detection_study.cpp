@@ -154,8 +154,7 @@ std::map<std::string, double> stated_sizes(const std::filesystem::path& file, co
     const auto* table = node->as_table();
     if (!table) throw InputError(file, line_of(*node), where, "expects a table of the effect's parameters and their true values, e.g. { \"deadtime.voltage\" = 0.28 }");
     std::vector<std::string> names;
-    const auto instance = make_effect(effect, {});
-    for (const auto& spec : instance->parameter_specs())
+    for (const auto& spec : EffectRegistry::instance().at(effect, "effect").parameters)
         if (spec.type == ParameterType::Real) names.push_back(effect + "." + spec.name);
     for (const auto& [name, value] : *table) {
         const std::string parameter(name.str());
