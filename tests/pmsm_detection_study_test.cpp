@@ -74,6 +74,49 @@ TEST_CASE("a study file makes clean, single, pair, triple and outside cases with
     CHECK(weak_sim.temp_magnet.at(5.0) == 85.0);  // the profile's own
 }
 
+TEST_CASE("a study's designs run every case on each variant of the profile, and a label gives one effect more sizes", "[pmsm][study]") {
+    testing::TemporaryDirectory dir;
+    const std::string psi_10 = "[[effect]]\nname = \"psi_thermal\"\nlabel = \"psi_thermal_10K\"\n"
+                               "clear = { effects.psi_thermal = {}, temperature.magnet = [[0.0, 20.0], [5.0, 30.0]] }\n";
+    const std::string designs = "[[design]]\nname = \"slow\"\ndescription = \"half the speed\"\nsettings = { noise.current = 0.002 }\n"
+                                "[[design]]\nname = \"quiet\"\nsettings = { noise.current = 0.0005, temperature.magnet = [[0.0, 20.0]] }\n";
+    const auto file = dir.write("s.toml", study_text(profile_path(), deadtime + psi_thermal + psi_10 + designs));
+    const auto spec = read_study(file);
+    REQUIRE(spec.designs.size() == 2);
+    CHECK(spec.designs[0].description == "half the speed");
+    const auto cases = study_cases(spec);
+    // Per design: clean, three clear, two weak, and the pairs of different effects (deadtime with each
+    // size of psi_thermal; the two sizes of psi_thermal never together).
+    const std::size_t per_design = 1 + 3 + 2 + 2;
+    REQUIRE(cases.size() == 2 * per_design);
+    CHECK(cases[0].design == "slow");
+    CHECK(cases[per_design].design == "quiet");
+    CHECK(case_name(cases[per_design]) == "quiet/clean");
+    const auto ten = std::find_if(cases.begin(), cases.end(), [](const StudyCase& c) { return c.label == "psi_thermal_10K"; });
+    REQUIRE(ten != cases.end());
+    CHECK(ten->truth == std::vector<std::string>{"psi_thermal"});
+    const auto pair = std::find_if(cases.begin(), cases.end(), [](const StudyCase& c) { return c.label == "deadtime+psi_thermal_10K"; });
+    REQUIRE(pair != cases.end());
+    CHECK(pair->truth == std::vector<std::string>{"deadtime", "psi_thermal"});
+    // The design's settings are merged first; the case's own win where both set a key.
+    const auto quiet_ten = std::find_if(cases.begin(), cases.end(), [](const StudyCase& c) { return c.design == "quiet" && c.label == "psi_thermal_10K"; });
+    const auto sim = parse_simulation_profile(case_profile(spec, *quiet_ten, 1), "merged", spec.profile.parent_path());
+    CHECK(sim.noise.current == 0.0005);
+    CHECK(sim.temp_magnet.at(5.0) == 30.0);
+    const auto quiet_clean = parse_simulation_profile(case_profile(spec, cases[per_design], 1), "merged", spec.profile.parent_path());
+    CHECK(quiet_clean.temp_magnet.at(5.0) == 20.0);
+    // --only sees the design.
+    auto only = spec;
+    only.only = "quiet/psi";
+    CHECK(study_cases(only).size() == 3);
+
+    // Effects the profile holds in every drive (a measured flux map) are in every case's truth.
+    const auto held = read_study(dir.write("held.toml", study_text(profile_path(), "profile_effects = [\"saturation\"]\n" + deadtime)));
+    const auto held_cases = study_cases(held);
+    CHECK(held_cases.front().truth == std::vector<std::string>{"saturation"});
+    CHECK(held_cases[1].truth == std::vector<std::string>{"deadtime", "saturation"});
+}
+
 TEST_CASE("a bad study file is refused naming the file, line and field", "[pmsm][study]") {
     testing::TemporaryDirectory dir;
     auto refused = [&](const std::string& text, const std::string& expected) {
@@ -97,6 +140,14 @@ TEST_CASE("a bad study file is refused naming the file, line and field", "[pmsm]
             "effect[0].weak_size.deadtime.voltage: expects a finite number");
     refused(study_text(profile_path(), "[[effect]]\nname = \"delay\"\nclear = {}\nweak_size = { \"delay.tau\" = 1e-5 }\n"),
             "effect[0].weak_size: there is no near-limit case");
+    refused(study_text(profile_path(), deadtime + "[[effect]]\nname = \"deadtime\"\nclear = {}\n"), "effect[1].name: 'deadtime' is listed twice (a `label`");
+    refused(study_text(profile_path(), deadtime + "[[effect]]\nname = \"deadtime\"\nlabel = \"dead time\"\nclear = {}\n"),
+            "effect[1].label: expects a non-empty name without");
+    refused(study_text(profile_path(), "[[design]]\nname = \"a\"\nsettings = {}\n[[design]]\nname = \"a\"\nsettings = {}\n"), "design[1].name: 'a' is listed twice");
+    refused(study_text(profile_path(), "[[design]]\nname = \"a\"\n"), "design[0].settings: is required");
+    refused(study_text(profile_path(), "[[design]]\nname = \"a\"\nsettings = {}\nspeed = 3\n"), "design[0].speed: unknown key");
+    refused(study_text(profile_path(), "profile_effects = [\"deadtime\"]\n" + deadtime), "effect: 'deadtime' is in profile_effects");
+    refused(study_text(profile_path(), "profile_effects = [\"saturaton\"]\n"), "profile_effects: ");
     // Two effects that set one profile key differently cannot make one drive.
     refused(study_text(profile_path(), "[[effect]]\nname = \"rs_thermal\"\nclear = { effects.rs_thermal = {}, temperature.winding = [[0.0, 25.0], [5.0, 30.0]] }\n"
                                        "weak = {}\n[[effect]]\nname = \"voltage_offset\"\n"

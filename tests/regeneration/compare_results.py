@@ -43,7 +43,7 @@ class Job:
         self.command = command      # argv after the program, with {out} for the output directory
         self.committed = committed  # directory in the repository
         self.files = files          # {committed name: produced relative path}; None: every committed file
-        self.only_rows = only_rows  # (case column, value): compare only the study's rows of this case
+        self.only_rows = only_rows  # {column: value}: compare only the study's rows of this case (and design)
 
 
 def experiment_jobs():
@@ -62,12 +62,16 @@ def experiment_jobs():
 
 
 def study_jobs(only=None):
+    """Each committed study; with `only`, one case of each (a label, or design/label on a study with designs)."""
     jobs = []
-    for name in ("detection_study", "detection_study_averaged"):
+    for name in ("detection_study", "detection_study_averaged", "baldor_study"):
         command = ["study", f"experiments/pmsm/{name}.toml", "--out", "{out}", "--quiet"]
+        rows = None
         if only:
             command += ["--only", only[name]]
-        jobs.append(Job(name, command, SOURCE / "results" / name, only_rows=("case", only[name]) if only else None))
+            design, _, label = only[name].rpartition("/")
+            rows = {"case": label, **({"design": design} if design else {})}
+        jobs.append(Job(name, command, SOURCE / "results" / name, only_rows=rows))
     return jobs
 
 
@@ -116,8 +120,8 @@ def csv_rows(text, only_rows=None):
     keep = [i for i, h in enumerate(header) if not TIME_FIELD.search(h)]
     body = rows[1:]
     if only_rows:
-        column = header.index(only_rows[0])
-        body = [r for r in body if r[column] == only_rows[1]]
+        columns = {header.index(field): value for field, value in only_rows.items()}
+        body = [r for r in body if all(r[c] == v for c, v in columns.items())]
     return [[r[i] for i in keep if i < len(r)] for r in [header] + body]
 
 
@@ -125,7 +129,7 @@ def jsonl_records(text, only_rows=None):
     records = []
     for line in text.splitlines():
         record = json.loads(line)
-        if only_rows and record.get(only_rows[0]) != only_rows[1]:
+        if only_rows and any(record.get(field) != value for field, value in only_rows.items()):
             continue
         for key in ("seconds", "time", "started"):
             record.pop(key, None)
@@ -181,7 +185,7 @@ def compare(job, produced):
             continue
         got = normalised(now, job.only_rows)
         if job.only_rows and isinstance(expected, list) and len(expected) <= 1:
-            differences.append(f"{committed.relative_to(SOURCE)}: holds no row of {job.only_rows[1]}")
+            differences.append(f"{committed.relative_to(SOURCE)}: holds no row of {job.only_rows}")
         elif expected != got:
             differences.append(f"{committed.relative_to(SOURCE)}: {first_difference(expected, got)}")
     return differences
@@ -206,7 +210,8 @@ def main():
     else:
         # Table 3 (GWO, SOA, ISOA on the PMSM) and the demo (every optimizer on classic and BBOB functions).
         jobs = [j for j in experiment_jobs() if j.name in ("pmsm_table3", "demo")]
-        jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal"})
+        jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal",
+                            "baldor_study": "high_small_quiet/clean"})
     jobs += tutorial_jobs(program, scratch)
 
     failed = 0

@@ -178,11 +178,11 @@ StudySpec read_study(const std::filesystem::path& path) {
     } catch (const toml::parse_error& e) {
         throw InputError(file, static_cast<long>(e.source().begin.line), "", std::string(e.description()));
     }
-    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside", "together"};
+    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside", "together", "design", "profile_effects"};
     for (auto&& [key, node] : root)
         if (!allowed.count(std::string(key.str())))
             throw InputError(file, line_of(node), std::string(key.str()),
-                             "unknown key (allowed: name, description, profile, model, seeds, pairs, triples, output, effect, outside, together)");
+                             "unknown key (allowed: " + fmt::format("{}", fmt::join(allowed, ", ")) + ")");
     StudySpec spec;
     spec.file = path;
     const auto directory = path.parent_path();
@@ -219,7 +219,7 @@ StudySpec read_study(const std::filesystem::path& path) {
     }
 
     std::set<std::string> names;
-    each_table(file, root, "effect", {"name", "clear", "weak", "in_pairs", "clear_size", "weak_size"}, [&](const std::string& field, const toml::table& t) {
+    each_table(file, root, "effect", {"name", "label", "clear", "weak", "in_pairs", "clear_size", "weak_size"}, [&](const std::string& field, const toml::table& t) {
         StudyEffect e;
         e.line = line_of(t);
         const toml::node& name = required(file, t, "name", field);
@@ -229,7 +229,16 @@ StudySpec read_study(const std::filesystem::path& path) {
         } catch (const UnknownPlugin& u) {
             throw InputError(file, line_of(name), field + ".name", u.what());
         }
-        if (!names.insert(e.name).second) throw InputError(file, line_of(name), field + ".name", "'" + e.name + "' is listed twice");
+        e.label = e.name;
+        const toml::node* label = t.get("label");
+        if (label) {
+            e.label = string_of(file, *label, field + ".label");
+            if (e.label.empty() || e.label.find_first_of("+:/ ") != std::string::npos)
+                throw InputError(file, line_of(*label), field + ".label", "expects a non-empty name without '+', ':', '/' or blanks (it names cases)");
+        }
+        if (!names.insert(e.label).second)
+            throw InputError(file, line_of(label ? *label : name), field + (label ? ".label" : ".name"),
+                             "'" + e.label + "' is listed twice (a `label` tells two entries of one effect apart)");
         e.clear = toml_text(settings_table(file, t, "clear", field));
         e.clear_as_written = as_written(text, *t.get("clear"));
         if (t.get("weak")) {
@@ -253,6 +262,38 @@ StudySpec read_study(const std::filesystem::path& path) {
         o.settings = toml_text(settings_table(file, t, "settings", field));
         o.settings_as_written = as_written(text, *t.get("settings"));
         spec.outside.push_back(std::move(o));
+    });
+    if (const auto* n = root.get("profile_effects")) {
+        const auto* list = n->as_array();
+        if (!list) throw InputError(file, line_of(*n), "profile_effects", "expects a list of effect names, e.g. [\"saturation\"]");
+        for (const auto& e : *list) {
+            std::string name = string_of(file, e, "profile_effects");
+            try {
+                name = EffectRegistry::instance().at(name, "effect").name;
+            } catch (const UnknownPlugin& u) {
+                throw InputError(file, line_of(e), "profile_effects", u.what());
+            }
+            if (std::find(spec.profile_effects.begin(), spec.profile_effects.end(), name) != spec.profile_effects.end())
+                throw InputError(file, line_of(e), "profile_effects", "'" + name + "' named twice");
+            spec.profile_effects.push_back(name);
+        }
+        std::sort(spec.profile_effects.begin(), spec.profile_effects.end());
+        for (const auto& e : spec.effects)
+            if (std::binary_search(spec.profile_effects.begin(), spec.profile_effects.end(), e.name))
+                throw InputError(file, e.line, "effect", "'" + e.name + "' is in profile_effects: the profile holds it in every drive already");
+    }
+    std::set<std::string> design_names;
+    each_table(file, root, "design", {"name", "description", "settings"}, [&](const std::string& field, const toml::table& t) {
+        StudyDesign d;
+        d.line = line_of(t);
+        const toml::node& name = required(file, t, "name", field);
+        d.name = string_of(file, name, field + ".name");
+        if (d.name.empty() || d.name.find_first_of("+:/ ") != std::string::npos)
+            throw InputError(file, line_of(name), field + ".name", "expects a non-empty name without '+', ':', '/' or blanks (it names cases)");
+        if (!design_names.insert(d.name).second) throw InputError(file, line_of(name), field + ".name", "'" + d.name + "' is listed twice");
+        if (const auto* n = t.get("description")) d.description = string_of(file, *n, field + ".description");
+        d.settings = toml_text(settings_table(file, t, "settings", field));
+        spec.designs.push_back(std::move(d));
     });
     each_table(file, root, "together", {"effects", "settings"}, [&](const std::string& field, const toml::table& t) {
         StudyTogether g;
@@ -282,8 +323,8 @@ StudySpec read_study(const std::filesystem::path& path) {
 }
 
 std::vector<StudyCase> study_cases(const StudySpec& spec) {
-    std::map<std::string, const StudyEffect*> by_name;
-    for (const auto& e : spec.effects) by_name[e.name] = &e;
+    std::map<std::string, const StudyEffect*> by_name;  // by label
+    for (const auto& e : spec.effects) by_name[e.label] = &e;
     const std::string file = spec.file.string();
     // The settings of several imperfections, merged. Two that set one key differently cannot be
     // simulated together unless a [[together]] table for a subset of them settles that key.
@@ -317,36 +358,61 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
     };
     std::vector<StudyCase> cases;
     cases.push_back({"clean", "clean", "", {}, false, ""});
-    for (const auto& e : spec.effects) cases.push_back({e.name, "single", "clear", {e.name}, false, combine({{e.name, e.clear}}), {{e.name, e.clear_size}}});
+    for (const auto& e : spec.effects) cases.push_back({e.label, "single", "clear", {e.name}, false, combine({{e.label, e.clear}}), {{e.name, e.clear_size}}});
     for (const auto& e : spec.effects)
-        if (!e.weak.empty()) cases.push_back({e.name, "single", "weak", {e.name}, false, combine({{e.name, e.weak}}), {{e.name, e.weak_size}}});
+        if (!e.weak.empty()) cases.push_back({e.label, "single", "weak", {e.name}, false, combine({{e.label, e.weak}}), {{e.name, e.weak_size}}});
     std::vector<std::vector<std::string>> pairs = spec.pairs;
     if (spec.all_pairs)
         for (std::size_t a = 0; a < spec.effects.size(); ++a)
             for (std::size_t b = a + 1; b < spec.effects.size(); ++b) {
                 if (!spec.effects[a].in_combinations || !spec.effects[b].in_combinations) continue;
-                std::vector<std::string> p{spec.effects[a].name, spec.effects[b].name};
+                if (spec.effects[a].name == spec.effects[b].name) continue;  // two sizes of one effect
+                std::vector<std::string> p{spec.effects[a].label, spec.effects[b].label};
                 std::sort(p.begin(), p.end());
                 pairs.push_back(p);
             }
     auto add_combination = [&](const std::vector<std::string>& names, const char* kind) {
         std::vector<std::pair<std::string, std::string>> parts;
         std::map<std::string, std::map<std::string, double>> sizes;
+        std::vector<std::string> truth;
         for (const auto& n : names) {
-            parts.emplace_back(n, by_name[n]->clear);
-            sizes[n] = by_name[n]->clear_size;
+            const StudyEffect& e = *by_name[n];
+            if (std::find(truth.begin(), truth.end(), e.name) != truth.end())
+                throw InputError(file, e.line, kind, fmt::format("{} names {} twice (labels {})", joined(names, "+"), e.name, joined(names, ", ")));
+            parts.emplace_back(n, e.clear);
+            sizes[e.name] = e.clear_size;
+            truth.push_back(e.name);
         }
-        cases.push_back({joined(names, "+"), kind, "clear", names, false, combine(parts), sizes});
+        std::sort(truth.begin(), truth.end());
+        cases.push_back({joined(names, "+"), kind, "clear", truth, false, combine(parts), sizes});
     };
     for (const auto& p : pairs) add_combination(p, "pair");
     for (const auto& t : spec.triples) add_combination(t, "triple");
     for (const auto& o : spec.outside) cases.push_back({"outside:" + o.name, "outside", "clear", {}, true, combine({{o.name, o.settings}})});
-    if (!spec.only.empty()) std::erase_if(cases, [&](const StudyCase& c) { return c.label.find(spec.only) == std::string::npos; });
+    if (!spec.profile_effects.empty())
+        for (auto& c : cases) {
+            std::vector<std::string> truth;
+            std::set_union(c.truth.begin(), c.truth.end(), spec.profile_effects.begin(), spec.profile_effects.end(), std::back_inserter(truth));
+            c.truth = std::move(truth);
+        }
+    if (!spec.designs.empty()) {
+        // Every case on every design, design-major.
+        std::vector<StudyCase> on_designs;
+        for (const auto& d : spec.designs)
+            for (auto c : cases) {
+                c.design = d.name;
+                c.design_settings = d.settings;
+                on_designs.push_back(std::move(c));
+            }
+        cases = std::move(on_designs);
+    }
+    if (!spec.only.empty()) std::erase_if(cases, [&](const StudyCase& c) { return case_name(c).find(spec.only) == std::string::npos; });
     return cases;
 }
 
 std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_t seed) {
     toml::table profile = parse_settings(spec.profile_text, spec.profile.string());
+    if (!c.design_settings.empty()) merge(profile, parse_settings(c.design_settings, spec.file.string()), "", {});
     merge(profile, parse_settings(c.settings, spec.file.string()), "", {});
     toml::table noise;
     noise.insert("seed", static_cast<std::int64_t>(seed));
@@ -365,7 +431,7 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
     run.records.resize(total);
     // Every case's profile is checked before any drive runs, so a bad setting stops the study at once.
     for (const auto& c : run.cases) {
-        const std::string source = fmt::format("{} (case {})", spec.profile.string(), c.label);
+        const std::string source = fmt::format("{} (case {})", spec.profile.string(), case_name(c));
         parse_simulation_profile(case_profile(spec, c, spec.seeds.front()), source, spec.profile.parent_path());
     }
     std::atomic<std::size_t> done{0};
@@ -377,12 +443,12 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         StudyRecord r;
         r.case_index = case_index;
         r.seed = spec.seeds[job % spec.seeds.size()];
-        const std::string source = fmt::format("{} (case {}, seed {})", spec.profile.string(), c.label, r.seed);
+        const std::string source = fmt::format("{} (case {}, seed {})", spec.profile.string(), case_name(c), r.seed);
         const DriveSimulation sim = parse_simulation_profile(case_profile(spec, c, r.seed), source, spec.profile.parent_path());
         SimulationResult result = simulate(sim);
         if (!spec.keep_data.empty()) {
             std::string name;
-            for (char ch : c.label + "_" + c.magnitude) name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' ? ch : '-';
+            for (char ch : (c.design.empty() ? "" : c.design + "_") + c.label + "_" + c.magnitude) name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' ? ch : '-';
             write_simulation(spec.keep_data / fmt::format("{}_seed{}.csv", name, r.seed), sim, result, source);
         }
         result.data.source = source;
@@ -538,10 +604,21 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                   "study file states it (`clear_size`, `weak_size`), lies below the detection limit the diagnosis printed for them.",
                                   spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size())});
     doc.add(Heading{2, "Summary"});
-    Table summary("detection per kind of case", {"cases", "drives", "correct", "correct or below the printed limit", "any false positive", "any missed", "said \"not in the library\"",
+    const bool designs = !spec.designs.empty();
+    // With designs every row names its design first.
+    auto with_design = [&](std::vector<Column> columns) {
+        if (designs) columns.insert(columns.begin(), Column("design"));
+        return columns;
+    };
+    auto design_cell = [&](std::vector<Cell> row, const std::string& design) {
+        if (designs) row.insert(row.begin(), Cell(design));
+        return row;
+    };
+    Table summary("detection per kind of case", with_design({"cases", "drives", "correct", "correct or below the printed limit", "any false positive", "any missed", "said \"not in the library\"",
                                                  "95 % intervals holding the truth when correct: Rs, Ld, Lq, psi_f",
-                                                 "the same where no structure is left"});
-    auto group = [&](const std::string& title, const std::function<bool(const StudyCase&)>& in) {
+                                                 "the same where no structure is left"}));
+    auto group_on = [&](const std::string& design, const std::string& title, const std::function<bool(const StudyCase&)>& kind_of) {
+        const auto in = [&](const StudyCase& c) { return c.design == design && kind_of(c); };
         std::size_t n = 0, k = 0, fp = 0, miss = 0, nil = 0, right = 0;
         std::array<std::size_t, 4> covered{}, intervals{}, covered_clean{}, intervals_clean{};
         for (std::size_t c = 0; c < run.cases.size(); ++c) {
@@ -560,20 +637,28 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
             }
         }
         if (n > 0)
-            summary.add_row({title, std::to_string(n), rate(k, n), rate(right, n), rate(fp, n), rate(miss, n), rate(nil, n), coverage_text(covered, intervals),
-                             coverage_text(covered_clean, intervals_clean)});
+            summary.add_row(design_cell({title, std::to_string(n), rate(k, n), rate(right, n), rate(fp, n), rate(miss, n), rate(nil, n), coverage_text(covered, intervals),
+                                         coverage_text(covered_clean, intervals_clean)},
+                                        design));
     };
-    group("clean data", [](const StudyCase& c) { return c.kind == "clean"; });
-    group("single effects, clear", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "clear"; });
-    group("single effects, near the limit", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "weak"; });
-    group("pairs, clear", [](const StudyCase& c) { return c.kind == "pair"; });
-    group("triples, clear", [](const StudyCase& c) { return c.kind == "triple"; });
-    group("effects outside the library", [](const StudyCase& c) { return c.kind == "outside"; });
+    std::vector<std::string> design_names;
+    for (const auto& d : spec.designs) design_names.push_back(d.name);
+    if (design_names.empty()) design_names.emplace_back();
+    for (const auto& design : design_names) {
+        auto group = [&](const std::string& title, const std::function<bool(const StudyCase&)>& kind_of) { group_on(design, title, kind_of); };
+        group(spec.profile_effects.empty() ? "clean data" : "the profile's own effects alone (" + joined(spec.profile_effects, ", ") + ")",
+              [](const StudyCase& c) { return c.kind == "clean"; });
+        group("single effects, clear", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "clear"; });
+        group("single effects, near the limit", [](const StudyCase& c) { return c.kind == "single" && c.magnitude == "weak"; });
+        group("pairs, clear", [](const StudyCase& c) { return c.kind == "pair"; });
+        group("triples, clear", [](const StudyCase& c) { return c.kind == "triple"; });
+        group("effects outside the library", [](const StudyCase& c) { return c.kind == "outside"; });
+    }
     doc.add(std::move(summary));
     doc.add(Heading{2, "Per case"});
-    Table per_case("detection per case", {"case", "kind", "magnitude", "correct", "missed below the printed limit", "false positives per drive", "missed", "not in library", "ties",
+    Table per_case("detection per case", with_design({"case", "kind", "magnitude", "correct", "missed below the printed limit", "false positives per drive", "missed", "not in library", "ties",
                                           Column("median error Rs, Ld, Lq, psi_f", "%"), "intervals holding the truth when correct",
-                                          "most common wrong answer"});
+                                          "most common wrong answer"}));
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         std::map<std::string, int> wrong;
         for (const auto& r : run.records)
@@ -586,19 +671,42 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                 common = fmt::format("`{}` ({}x)", answer, count);
             }
         const auto& x = s[c];
-        per_case.add_row({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs),
+        per_case.add_row(design_cell({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs),
                           std::to_string(x.right_for_log - x.correct), fmt::format("{:.2f}", x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library),
                           std::to_string(x.ties),
                           fmt::format("{:.2f}, {:.2f}, {:.2f}, {:.2f}", 100 * x.median_error[0], 100 * x.median_error[1], 100 * x.median_error[2],
                                       100 * x.median_error[3]),
-                          coverage_text(x.covered, x.intervals), common});
+                          coverage_text(x.covered, x.intervals), common}, run.cases[c].design));
     }
     doc.add(std::move(per_case));
+    if (designs) {
+        doc.add(Heading{2, "The designs"});
+        // The keys a design sets, not its values: a design may replace the whole list of segments.
+        Table table("the designs", {"design", "what it is", "profile keys it sets (values in the study file)"});
+        for (const auto& d : spec.designs) {
+            std::vector<std::string> keys;
+            const std::function<void(const toml::table&, const std::string&)> collect = [&](const toml::table& t, const std::string& prefix) {
+                for (auto&& [key, node] : t) {
+                    const std::string path = prefix + std::string(key.str());
+                    if (const auto* inner = node.as_table())
+                        collect(*inner, path + ".");
+                    else if (const auto* list = node.as_array(); list && list->is_array_of_tables())
+                        keys.push_back(fmt::format("{} ({})", path, list->size()));
+                    else
+                        keys.push_back(path);
+                }
+            };
+            collect(parse_settings(d.settings, spec.file.string()), "");
+            table.add_row({d.name, d.description.empty() ? "—" : d.description, joined(keys, ", ")});
+        }
+        doc.add(std::move(table));
+    }
+    if (spec.effects.empty() && spec.outside.empty()) return markdown(doc);
     doc.add(Heading{2, "The settings of each effect"});
     // The cells put the settings on one line (markdown_table_cell makes line breaks blanks).
     Table settings("the settings of each effect", {"effect", "clear", "near the limit"});
     for (const auto& e : spec.effects)
-        settings.add_row({e.name, "`" + e.clear_as_written + "`", e.weak.empty() ? std::string("—") : "`" + e.weak_as_written + "`"});
+        settings.add_row({e.label, "`" + e.clear_as_written + "`", e.weak.empty() ? std::string("—") : "`" + e.weak_as_written + "`"});
     for (const auto& o : spec.outside) settings.add_row({o.name + " (not in the library)", "`" + o.settings_as_written + "`", "—"});
     doc.add(std::move(settings));
     return markdown(doc);
@@ -606,10 +714,12 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
 
 std::string study_csv(const StudyRun& run) {
     const auto s = summaries(run);
-    Table table("detection per case",
-                {"case", "kind", "magnitude", "drives", "correct", "rate", "rate_low95", "rate_high95", "right_for_log", "false_positives_per_drive", "any_missed",
+    const bool designs = std::any_of(run.cases.begin(), run.cases.end(), [](const StudyCase& c) { return !c.design.empty(); });
+    std::vector<Column> columns{"case", "kind", "magnitude", "drives", "correct", "rate", "rate_low95", "rate_high95", "right_for_log", "false_positives_per_drive", "any_missed",
                  "not_in_library", "ties", "median_abs_error_rs", "median_abs_error_ld", "median_abs_error_lq", "median_abs_error_psi_f",
-                 "coverage_rs", "coverage_ld", "coverage_lq", "coverage_psi_f", "coverage_drives", "mean_seconds"});
+                 "coverage_rs", "coverage_ld", "coverage_lq", "coverage_psi_f", "coverage_drives", "mean_seconds"};
+    if (designs) columns.insert(columns.begin(), Column("design"));
+    Table table("detection per case", std::move(columns));
     auto g6 = [](double v) { return fmt::format("{:.6g}", v); };
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         const auto& x = s[c];
@@ -617,13 +727,15 @@ std::string study_csv(const StudyRun& run) {
         auto coverage = [&](std::size_t j) {
             return x.intervals[j] ? g6(static_cast<double>(x.covered[j]) / static_cast<double>(x.intervals[j])) : std::string();
         };
-        table.add_row({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude, std::to_string(x.runs), std::to_string(x.correct),
+        std::vector<Cell> row{run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude, std::to_string(x.runs), std::to_string(x.correct),
                        g6(static_cast<double>(x.correct) / static_cast<double>(std::max<std::size_t>(x.runs, 1))), g6(lo), g6(hi),
                        std::to_string(x.right_for_log), g6(x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library), std::to_string(x.ties),
                        g6(x.median_error[0]), g6(x.median_error[1]), g6(x.median_error[2]), g6(x.median_error[3]),
                        coverage(0), coverage(1), coverage(2), coverage(3),
                        std::to_string(*std::max_element(x.intervals.begin(), x.intervals.end())),
-                       fmt::format("{:.4g}", x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)))});
+                       fmt::format("{:.4g}", x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)))};
+        if (designs) row.insert(row.begin(), Cell(run.cases[c].design));
+        table.add_row(std::move(row));
     }
     return csv(table);
 }
@@ -634,7 +746,9 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
     auto missed_limits = nlohmann::ordered_json::array();
     for (const auto& l : r.missed_limits)
         missed_limits.push_back({{"parameter", l.parameter}, {"limit", std::isfinite(l.limit) ? nlohmann::ordered_json(l.limit) : nlohmann::ordered_json(nullptr)}});
-    return {{"case", c.label},
+    nlohmann::ordered_json out{{"case", c.label}};
+    if (!c.design.empty()) out["design"] = c.design;
+    out.update(nlohmann::ordered_json{
             {"kind", c.kind},
             {"magnitude", c.magnitude},
             {"seed", r.seed},
@@ -657,7 +771,8 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"rms", r.rms},
             {"rms_recommended", r.rms_recommended},
             {"noise", r.noise},
-            {"seconds", r.seconds}};
+            {"seconds", r.seconds}});
+    return out;
 }
 
 }  // namespace mhb::pmsm

@@ -27,6 +27,10 @@ namespace mhb::pmsm {
 
 struct StudyEffect {
     std::string name;            // the library effect the diagnosis should recommend
+    // How the study's cases, pairs and triples name it: the effect's name unless the file gives a
+    // `label`, which lets one effect appear at more sizes than clear and near the limit
+    // (psi_thermal_10K, psi_thermal_60K).
+    std::string label;
     std::string clear, weak;     // profile settings, TOML text of nested tables (weak empty: no near-limit case)
     std::string clear_as_written, weak_as_written;  // the same, as the study file writes them (for tables)
     bool in_combinations = true; // also in "all" pairs
@@ -53,6 +57,14 @@ struct StudyTogether {
     long line = 0;
 };
 
+// A variant of the profile every case runs on (other speeds, currents, noise, another machine):
+// its settings are merged into the profile before the case's own, which win where both set a key.
+struct StudyDesign {
+    std::string name, description;
+    std::string settings;        // TOML text of nested tables
+    long line = 0;
+};
+
 struct StudySpec {
     std::filesystem::path file;        // the study file
     std::string name, description;
@@ -66,9 +78,13 @@ struct StudySpec {
     std::vector<std::vector<std::string>> triples;
     std::vector<StudyOutside> outside;
     std::vector<StudyTogether> together;
+    std::vector<StudyDesign> designs;  // none: every case runs on the profile as it is
+    // Library effects the profile itself holds in every drive (a measured flux map is saturation):
+    // part of every case's truth, so "clean" means "the profile's own effects alone".
+    std::vector<std::string> profile_effects;  // sorted
     std::filesystem::path output;      // resolved against the study file's directory
     std::filesystem::path keep_data;   // when set, each drive's measurement is written here (CASE_seedN.csv and sidecar)
-    std::string only;                  // when set, only cases whose label contains it
+    std::string only;                  // when set, only cases whose label (design/label with designs) contains it
 };
 
 // Reads and checks a study file (InputError naming the file, line and field).
@@ -83,9 +99,14 @@ struct StudyCase {
     bool outside = false;               // an effect the library lacks is present
     std::string settings;               // merged settings, TOML text
     std::map<std::string, std::map<std::string, double>> sizes;  // per effect present, its stated true sizes
+    std::string design;                 // the [[design]] it runs on (empty: the profile as it is)
+    std::string design_settings;        // its settings, TOML text, merged into the profile before `settings`
 };
 
 std::vector<StudyCase> study_cases(const StudySpec& spec);
+
+// "deadtime", or "high_speed/deadtime" on a design: how messages, --only and file names call a case.
+inline std::string case_name(const StudyCase& c) { return c.design.empty() ? c.label : c.design + "/" + c.label; }
 
 struct StudyRecord {
     std::size_t case_index = 0;
