@@ -52,9 +52,13 @@ double Jso::p_best_rate(double used) const { return settings().p_best * (1.0 - 0
 bool Jso::pbest_may_be_target(double used) const { return used >= 0.5; }
 
 // Each new entry is the mean of the old one and the generation's Lehmer mean; a terminal CR mean
-// (-1) is averaged in as the authors' code does, so the slot is terminal while it stays below 0.
+// (-1) is averaged in as the authors' code does, so the slot is terminal while it stays below 0 and
+// leaves ⊥ as later means pull it up. sticky_terminal_cr keeps a slot at ⊥ once it is below 0
+// instead, L-SHADE's rule carried over to jSO's reading of ⊥.
 std::pair<double, double> Jso::updated_memory(double old_f, double old_cr, double f_mean, double cr_mean) const {
-    return {(f_mean + old_f) / 2.0, (cr_mean + old_cr) / 2.0};
+    const double f = (f_mean + old_f) / 2.0;
+    if (settings().sticky_terminal_cr && old_cr < 0.0) return {f, terminal_cr};
+    return {f, (cr_mean + old_cr) / 2.0};
 }
 
 namespace {
@@ -68,6 +72,10 @@ const bool registered = register_optimizer({
         ParameterSpec::real("archive_rate", 1.0, 0.0, 100.0, "archive size |A| = round(archive_rate x N)"),
         ParameterSpec::integer("memory_size", 5, 2, 1000, "H, entries of the memory; the last is fixed at 0.9, 0.9"),
         ParameterSpec::real("p_best", 0.25, 0.0, 1.0, "p_max: p falls linearly from p_max to p_max/2 over the budget"),
+        archive_entry_parameter(),
+        ParameterSpec::boolean("sticky_terminal_cr", false,
+                               "true: a CR memory slot below 0 (terminal) stays terminal; false: it is averaged with "
+                               "later means and may leave it (the authors' code)"),
     },
     [](const ParameterSet& p) { return std::make_unique<Jso>(p); },
 });

@@ -35,10 +35,18 @@ Settings settings_from(const ParameterSet& p) {
     s.archive_rate = p.real("archive_rate");
     s.memory_size = static_cast<int>(p.integer("memory_size"));
     s.p_best = p.real("p_best");
+    s.archive_entry = p.text("archive_entry") == "trial" ? ArchiveEntry::trial : ArchiveEntry::parent;
+    s.sticky_terminal_cr = p.boolean("sticky_terminal_cr");
     if (s.initial_population != 0 && s.initial_population < s.minimum_population)
         throw ParameterError("population", "must be 0 (the paper's rule) or at least 4, the final population (got " +
                                                std::to_string(s.initial_population) + ")");
     return s;
+}
+
+ParameterSpec archive_entry_parameter() {
+    return ParameterSpec::choice("archive_entry", "parent", {"parent", "trial"},
+                                 "what a successful trial sends to the archive: the parent it replaced (the papers) "
+                                 "or the trial itself (Tanabe's code)");
 }
 
 Eigen::Index Lshade::initial_population(int dimension) const {
@@ -57,7 +65,8 @@ bool Lshade::pbest_may_be_target(double) const { return true; }
 
 std::pair<double, double> Lshade::updated_memory(double, double old_cr, double f_mean, double cr_mean) const {
     // The paper keeps ⊥ once reached (Algorithm 1); Tanabe's code resets it (docs/algorithms.md).
-    return {f_mean, old_cr == terminal_cr ? terminal_cr : cr_mean};
+    const bool keep_terminal = settings_.sticky_terminal_cr && old_cr == terminal_cr;
+    return {f_mean, keep_terminal ? terminal_cr : cr_mean};
 }
 
 void Lshade::initialize(Evaluator& evaluator, Rng& rng) {
@@ -143,7 +152,7 @@ void Lshade::iterate(const Progress& progress, Evaluator& evaluator, Rng& rng) {
                 const Eigen::Index slot = archive_count_ < archive_capacity_
                                               ? archive_count_++
                                               : static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(archive_capacity_)));
-                archive_.col(slot) = population_.col(i);
+                archive_.col(slot) = settings_.archive_entry == ArchiveEntry::parent ? population_.col(i) : trials_.col(i);
             }
         }
         population_.col(i) = trials_.col(i);
@@ -157,14 +166,19 @@ void Lshade::iterate(const Progress& progress, Evaluator& evaluator, Rng& rng) {
     shrink(planned_population(initial_, settings_.minimum_population, used_after));
 }
 
-void Lshade::update_memory() {
-    if (success_f_.empty()) return;
-    const double f_mean = weighted_lehmer_mean(success_f_, improvement_);
-    const bool all_zero = std::all_of(success_cr_.begin(), success_cr_.end(), [](double c) { return c == 0.0; });
-    const double cr_mean = all_zero ? terminal_cr : weighted_lehmer_mean(success_cr_, improvement_);
+void Lshade::update_memory(const std::vector<double>& success_f, const std::vector<double>& success_cr,
+                           const std::vector<double>& improvements) {
+    if (success_f.empty()) return;
+    const double f_mean = weighted_lehmer_mean(success_f, improvements);
+    const bool all_zero = std::all_of(success_cr.begin(), success_cr.end(), [](double c) { return c == 0.0; });
+    const double cr_mean = all_zero ? terminal_cr : weighted_lehmer_mean(success_cr, improvements);
     const auto k = static_cast<std::size_t>(memory_position_);
     std::tie(memory_f_[k], memory_cr_[k]) = updated_memory(memory_f_[k], memory_cr_[k], f_mean, cr_mean);
     memory_position_ = (memory_position_ + 1) % settings_.memory_size;
+}
+
+void Lshade::update_memory() {
+    update_memory(success_f_, success_cr_, improvement_);
     success_f_.clear();
     success_cr_.clear();
     improvement_.clear();
@@ -204,6 +218,10 @@ const bool registered = register_optimizer({
         ParameterSpec::real("archive_rate", 2.6, 0.0, 100.0, "archive size |A| = round(archive_rate x N)"),
         ParameterSpec::integer("memory_size", 6, 1, 1000, "H, entries of the success-history memory of F and CR"),
         ParameterSpec::real("p_best", 0.11, 0.0, 1.0, "p of current-to-pbest/1: pbest from the best max(2, round(p N))"),
+        archive_entry_parameter(),
+        ParameterSpec::boolean("sticky_terminal_cr", true,
+                               "true: a CR memory slot at the terminal value stays there (the paper); false: the next "
+                               "update replaces it (Tanabe's code)"),
     },
     [](const ParameterSet& p) { return std::make_unique<PaperLshade>(p); },
 });

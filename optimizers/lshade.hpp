@@ -20,6 +20,11 @@ Eigen::Index planned_population(Eigen::Index initial, Eigen::Index minimum, doub
 // mean_WL(S) = sum w_k S_k^2 / sum w_k S_k with w_k = Δf_k / sum Δf (Δf_k > 0).
 double weighted_lehmer_mean(const std::vector<double>& values, const std::vector<double>& improvements);
 
+// What a successful trial sends to the archive. The paper: the parent it replaced; Tanabe's code (it
+// copies the trial into the population before copying the population's column to the archive): the
+// trial. docs/algorithms.md, "selection".
+enum class ArchiveEntry { parent, trial };
+
 struct Settings {
     Eigen::Index initial_population = 0;  // 0: the variant's rule of the dimension
     Eigen::Index minimum_population = 4;
@@ -28,6 +33,10 @@ struct Settings {
     double p_best = 0.11;                  // share of the population p-best is drawn from
     double initial_memory_f = 0.5;
     double initial_memory_cr = 0.5;
+    ArchiveEntry archive_entry = ArchiveEntry::parent;
+    // Whether a CR slot that reached ⊥ keeps it (L-SHADE's paper) or takes the next generation's mean
+    // again (Tanabe's code, which resets the slot before it tests it for ⊥). docs/algorithms.md.
+    bool sticky_terminal_cr = true;
 };
 
 class Lshade : public Optimizer {
@@ -40,6 +49,15 @@ public:
     Eigen::Index population_size() const { return population_.cols(); }
     const std::vector<double>& memory_f() const { return memory_f_; }
     const std::vector<double>& memory_cr() const { return memory_cr_; }
+    const Matrix& population() const { return population_; }
+    const Vector& fitness() const { return fitness_; }
+    // The archive's members, in the order they were stored (until it is full).
+    Eigen::Ref<const Matrix> archive() const { return archive_.leftCols(archive_count_); }
+
+    // One generation's successful F, CR and improvements Δf folded into the memory slot whose turn it
+    // is; the rest of the class calls it with the generation's own sets, tests with sets of their own.
+    void update_memory(const std::vector<double>& success_f, const std::vector<double>& success_cr,
+                       const std::vector<double>& improvements);
 
     // The rules jSO changes (public so that tests can check each against the papers). `used` is the share of the evaluation budget spent when the generation starts (NFE/MAX_NFE).
     virtual Eigen::Index initial_population(int dimension) const;
@@ -77,5 +95,7 @@ private:
 
 // Parameters L-SHADE and jSO share; each adds its own defaults.
 Settings settings_from(const ParameterSet& p);
+// `archive_entry`, which both register with the same default (the parent, as both papers).
+ParameterSpec archive_entry_parameter();
 
 }  // namespace mhb::shade

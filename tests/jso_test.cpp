@@ -54,6 +54,14 @@ TEST_CASE("jso: the memory update averages the old entry with the generation's L
     CHECK(cr == Approx(0.7));
     // Every successful CR was 0: the terminal -1 averaged with 0.8 gives -0.1, read as CR = 0.
     CHECK(jso.updated_memory(0.3, 0.8, 0.5, shade::terminal_cr).second == Approx(-0.1));
+    // By default a slot below 0 leaves ⊥ as later means pull it up: (-0.1 + 0.6) / 2 = 0.25.
+    CHECK(jso.updated_memory(0.3, -0.1, 0.5, 0.6).second == Approx(0.25));
+    // sticky_terminal_cr = true keeps it at ⊥; F is averaged as before.
+    const auto sticky = make_optimizer("jso", {{"sticky_terminal_cr", true}});
+    const auto [sticky_f, sticky_cr] = jso_of(*sticky).updated_memory(0.3, -0.1, 0.5, 0.6);
+    CHECK(sticky_f == Approx(0.4));
+    CHECK(sticky_cr == shade::terminal_cr);
+    CHECK(jso_of(*sticky).updated_memory(0.3, 0.8, 13.0 / 14.0, 0.6).second == Approx(0.7));
 }
 
 TEST_CASE("jso keeps the framework's contract: a seed fixes the run, affine maps of f change nothing, never outside the box", "[jso]") {

@@ -3,6 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "framework/registry.hpp"
 #include "framework/trial.hpp"
@@ -81,6 +84,71 @@ TEST_CASE("lshade: weighted Lehmer mean and memory update on a hand example", "[
     CHECK(lshade.updated_memory(0.5, 0.5, 0.6, shade::terminal_cr) == std::pair{0.6, shade::terminal_cr});
     // The paper's constants.
     CHECK(lshade.p_best_rate(0.3) == 0.11);
+}
+
+TEST_CASE("lshade and jso: archive_entry archives the replaced parent (default) or the successful trial", "[lshade][jso]") {
+    testing::ShiftedSphere sphere(10, -5, 5, 1.0);
+    for (const std::string name : {"lshade", "jso"})
+        for (const std::string entry : {"", "parent", "trial"}) {
+            INFO(name << ", archive_entry = '" << entry << "'");
+            std::map<std::string, ParameterValue> given{{"population", std::int64_t{20}}};
+            if (!entry.empty()) given["archive_entry"] = entry;
+            auto optimizer = make_optimizer(name, given);
+            const auto& shade = dynamic_cast<const shade::Lshade&>(*optimizer);
+            // So large a budget that the first generation removes nobody: column i is individual i
+            // before and after it, and the archive (at least 20 places) is not full.
+            testing::ManualRun run(sphere, Budget{0, 1'000'000'000}, 7);
+            run.initialize(*optimizer);
+            REQUIRE(shade.archive().cols() == 0);
+            const Matrix before = shade.population();
+            const Vector fitness_before = shade.fitness();
+            run.iterate(*optimizer);
+            REQUIRE(shade.population().cols() == 20);
+            // The successes are the individuals whose fitness fell strictly (a trial replaces its
+            // parent also on a tie, but only a strict improvement archives anything); a not yet full
+            // archive takes them in index order.
+            std::vector<Eigen::Index> improved;
+            for (Eigen::Index i = 0; i < 20; ++i)
+                if (shade.fitness()[i] < fitness_before[i]) improved.push_back(i);
+            REQUIRE(!improved.empty());
+            REQUIRE(shade.archive().cols() == static_cast<Eigen::Index>(improved.size()));
+            const Matrix& source = entry == "trial" ? shade.population() : before;
+            for (std::size_t k = 0; k < improved.size(); ++k)
+                CHECK((shade.archive().col(static_cast<Eigen::Index>(k)).array() == source.col(improved[k]).array()).all());
+        }
+}
+
+TEST_CASE("lshade: sticky_terminal_cr keeps a CR slot at ⊥ (the paper, default) or lets the next update replace it (Tanabe's code)", "[lshade]") {
+    testing::ShiftedSphere sphere(10, -5, 5, 1.0);
+    for (const bool sticky : {true, false}) {
+        INFO("sticky_terminal_cr = " << sticky);
+        // One memory slot, so that every update writes slot 0.
+        auto optimizer = make_optimizer("lshade", {{"population", std::int64_t{20}}, {"memory_size", std::int64_t{1}},
+                                                   {"sticky_terminal_cr", sticky}});
+        auto& lshade = dynamic_cast<shade::Lshade&>(*optimizer);
+        testing::ManualRun run(sphere, Budget{0, 100000}, 3);
+        run.initialize(*optimizer);
+        REQUIRE(lshade.memory_cr() == std::vector<double>{0.5});
+        // Every successful CR 0: ⊥ either way. S_F = {0.5, 1} with Δf = {1, 3}: 13/14 (the hand example above).
+        lshade.update_memory({0.5, 1.0}, {0.0, 0.0}, {1.0, 3.0});
+        CHECK(lshade.memory_f()[0] == Approx(13.0 / 14.0).epsilon(1e-15));
+        CHECK(lshade.memory_cr()[0] == shade::terminal_cr);
+        // Then S_CR = {0.3, 0.6}, Δf = {1, 3}: w = 1/4, 3/4, mean_WL = (0.0225 + 0.27) / (0.075 + 0.45) = 39/70;
+        // S_F = {0.2, 0.6}: (0.01 + 0.27) / (0.05 + 0.45) = 0.56.
+        lshade.update_memory({0.2, 0.6}, {0.3, 0.6}, {1.0, 3.0});
+        CHECK(lshade.memory_f()[0] == Approx(0.56).epsilon(1e-15));
+        if (sticky)
+            CHECK(lshade.memory_cr()[0] == shade::terminal_cr);
+        else
+            CHECK(lshade.memory_cr()[0] == Approx(39.0 / 70.0).epsilon(1e-15));
+        // No success: the memory is left as it is.
+        const auto kept = lshade.memory_cr();
+        lshade.update_memory({}, {}, {});
+        CHECK(lshade.memory_cr() == kept);
+    }
+    // The default is the paper's.
+    const auto optimizer = make_optimizer("lshade");
+    CHECK(dynamic_cast<const shade::Lshade&>(*optimizer).updated_memory(0.5, shade::terminal_cr, 0.6, 0.7).second == shade::terminal_cr);
 }
 
 TEST_CASE("lshade keeps the framework's contract: a seed fixes the run, affine maps of f change nothing, never outside the box", "[lshade]") {
