@@ -12,8 +12,9 @@ each job twice.
 
 The subset (about half a minute on 2 cores) reruns Table 3, the demo (every optimizer on classic and
 BBOB functions), one case of each detection study and the tutorial's diagnosis; --all reruns every
-experiment and study (about 15 minutes on 2 cores, and about 12 more for results/cec2022 and 25 more
-for results/cec2017 as they were measured, docs/test-functions.md).
+experiment and study (about 15 minutes on 2 cores, and about 12 more for results/cec2022, 25 more
+for results/cec2017, 4 for results/cec2022_lshade_code_choices and 50 for results/cec2017_jso_lshade
+as they were measured, docs/test-functions.md and docs/algorithms.md).
 Exit 0 when everything matches, 1 with a list of differences, 2 on bad usage.
 """
 import argparse
