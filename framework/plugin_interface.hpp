@@ -11,7 +11,8 @@
 // 4: Effect gained its operating scale (a member) and narrow_range, range_end_meaning and
 //    implausible_reason; plant_flux_model takes the plant's scale; the saturation law changed.
 // 5: Effect gained is_size (a virtual: the parameters a detection limit is stated in).
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 5
+// 6: Measurement gained theta_m (the shaft's mechanical angle, an optional column: its layout changed).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 6
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

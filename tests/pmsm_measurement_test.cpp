@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -152,6 +153,7 @@ TEST_CASE("written measurements read back bit for bit", "[pmsm][measurement]") {
     m.omega_e = Eigen::VectorXd::Constant(n, 16.0 * 10.0 * 2.0 * 3.141592653589793 / 60.0);
     m.t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.0004 * (n - 1));
     m.theta_e = Eigen::VectorXd::Random(n) * 3.1;
+    m.theta_m = Eigen::VectorXd::Random(n) * 3.1;
     m.temp_magnet = Eigen::VectorXd::Constant(n, 1.0 / 3.0);
     m.segment_labels = {"id0", "id-0.1"};
     m.segment = Eigen::VectorXi::Zero(n);
@@ -169,10 +171,23 @@ TEST_CASE("written measurements read back bit for bit", "[pmsm][measurement]") {
     CHECK(back.omega_e == m.omega_e);
     CHECK(*back.t == *m.t);
     CHECK(*back.theta_e == *m.theta_e);
+    CHECK(*back.theta_m == *m.theta_m);
     CHECK(*back.temp_magnet == *m.temp_magnet);
     CHECK_FALSE(back.temp_winding.has_value());
     CHECK(back.segment_labels == m.segment_labels);
     CHECK(back.segment == m.segment);
+}
+
+TEST_CASE("the shaft angle theta_m is an optional column, in rad or deg, kept by row selection", "[pmsm][measurement]") {
+    const auto map = parse_column_map("theta_m=shaft[deg]", "command line", "--columns");
+    const auto m = parse_measurement("i_d,i_q,u_d,u_q,omega_e,shaft\n0,0.1,0,5,16,90\n0,0.1,0,5,16,-45\n", "m.csv", map);
+    REQUIRE(m.theta_m.has_value());
+    CHECK((*m.theta_m)[0] == 90.0 * (std::numbers::pi / 180.0));
+    CHECK((*m.theta_m)[1] == -45.0 * (std::numbers::pi / 180.0));
+    const auto second = select_rows(m, std::vector<Eigen::Index>{1});
+    REQUIRE(second.theta_m.has_value());
+    CHECK((*second.theta_m)[0] == (*m.theta_m)[1]);
+    CHECK_FALSE(parse_measurement("i_d,i_q,u_d,u_q,omega_e\n0,0.1,0,5,16\n", "m.csv").theta_m.has_value());
 }
 
 TEST_CASE("labels that CSV cannot carry are refused by the writer", "[pmsm][measurement]") {

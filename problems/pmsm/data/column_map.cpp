@@ -36,6 +36,7 @@ const std::map<std::string, ColumnUnits, std::less<>>& units_by_column() {
         {"u_q", {"V", {{"mV", 1000.0, 1.0, 0.0}}}},
         {"omega_e", {"rad/s", {{"rpm", 1.0, std::numbers::pi / 30.0, 0.0}}}},
         {"theta_e", {"rad", {{"deg", 1.0, std::numbers::pi / 180.0, 0.0}}}},
+        {"theta_m", {"rad", {{"deg", 1.0, std::numbers::pi / 180.0, 0.0}}}},
         {"temp_winding", {"degC", {{"K", 1.0, 1.0, -273.15}}}},
         {"temp_magnet", {"degC", {{"K", 1.0, 1.0, -273.15}}}},
         {"t", {"s", {{"ms", 1000.0, 1.0, 0.0}, {"us", 1e6, 1.0, 0.0}}}},

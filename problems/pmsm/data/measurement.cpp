@@ -24,7 +24,7 @@ namespace mhb::pmsm {
 
 void Measurement::resize(Eigen::Index n) {
     for (auto* v : {&i_d, &i_q, &u_d, &u_q, &omega_e}) v->resize(n);
-    for (auto* v : {&t, &theta_e, &temp_winding, &temp_magnet})
+    for (auto* v : {&t, &theta_e, &temp_winding, &temp_magnet, &theta_m})
         if (*v) (*v)->resize(n);
     if (has_segments()) segment.resize(n);
 }
@@ -44,7 +44,11 @@ Eigen::VectorXd* numeric_column(Measurement& m, const std::string& name) {
     if (name == "u_d") return &m.u_d;
     if (name == "u_q") return &m.u_q;
     if (name == "omega_e") return &m.omega_e;
-    auto& slot = name == "t" ? m.t : name == "theta_e" ? m.theta_e : name == "temp_winding" ? m.temp_winding : m.temp_magnet;
+    auto& slot = name == "t"              ? m.t
+                 : name == "theta_e"      ? m.theta_e
+                 : name == "theta_m"      ? m.theta_m
+                 : name == "temp_winding" ? m.temp_winding
+                                          : m.temp_magnet;
     slot.emplace();
     return &*slot;
 }

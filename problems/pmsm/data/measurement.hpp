@@ -20,8 +20,10 @@ struct Measurement {
 
     // Required: controller-frame currents (A), reference voltages (V), electrical speed (rad/s).
     Eigen::VectorXd i_d, i_q, u_d, u_q, omega_e;
-    // Optional: time (s), controller's electrical angle (rad), winding and magnet temperatures (°C).
-    std::optional<Eigen::VectorXd> t, theta_e, temp_winding, temp_magnet;
+    // Optional: time (s), controller's electrical angle (rad), winding and magnet temperatures (°C),
+    // the shaft's mechanical angle (rad; an absolute encoder or resolver: its zero is a fixed mark
+    // on the shaft, so a harmonic's phase against it means the same in every segment).
+    std::optional<Eigen::VectorXd> t, theta_e, temp_winding, temp_magnet, theta_m;
     // Optional operating-point label per row: segment[k] indexes segment_labels (labels in order of
     // first appearance). Both empty when the file has no segment column.
     std::vector<std::string> segment_labels;
@@ -48,7 +50,7 @@ inline constexpr std::size_t csv_block_bytes = std::size_t{4} << 20;
 
 // Names of the columns, in the order the writer emits them.
 inline constexpr const char* required_columns[] = {"i_d", "i_q", "u_d", "u_q", "omega_e"};
-inline constexpr const char* optional_columns[] = {"t", "segment", "theta_e", "temp_winding", "temp_magnet"};
+inline constexpr const char* optional_columns[] = {"t", "segment", "theta_e", "temp_winding", "temp_magnet", "theta_m"};
 
 enum class MeasurementFormat { Csv, Mat5, Mat73, Hdf5, OtherMat };
 

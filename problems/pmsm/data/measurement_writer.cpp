@@ -10,12 +10,13 @@
 namespace mhb::pmsm {
 
 std::string format_measurement(const Measurement& m) {
-    // Column order: time and operating point first, then the angle, the required signals, temperatures.
+    // Column order: time and operating point first, then the angles, the required signals, temperatures.
     // A null column pointer stands for the segment label.
     std::vector<std::pair<const char*, const Eigen::VectorXd*>> columns;
     if (m.t) columns.emplace_back("t", &*m.t);
     if (m.has_segments()) columns.emplace_back("segment", nullptr);
     if (m.theta_e) columns.emplace_back("theta_e", &*m.theta_e);
+    if (m.theta_m) columns.emplace_back("theta_m", &*m.theta_m);
     columns.emplace_back("i_d", &m.i_d);
     columns.emplace_back("i_q", &m.i_q);
     columns.emplace_back("u_d", &m.u_d);

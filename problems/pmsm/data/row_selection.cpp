@@ -35,6 +35,7 @@ void pick_rows(const Measurement& from, Measurement& to, const std::vector<Eigen
     pick_optional(from.theta_e, to.theta_e);
     pick_optional(from.temp_winding, to.temp_winding);
     pick_optional(from.temp_magnet, to.temp_magnet);
+    pick_optional(from.theta_m, to.theta_m);
     if (from.has_segments()) {
         std::vector<int> renumber(from.segment_labels.size(), -1);
         std::vector<std::string> labels;

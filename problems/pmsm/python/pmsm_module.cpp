@@ -67,6 +67,7 @@ Measurement measurement_from_columns(const py::dict& data) {
     if (data.contains("theta_e")) m.theta_e = column_of(data["theta_e"], "theta_e", rows);
     if (data.contains("temp_winding")) m.temp_winding = column_of(data["temp_winding"], "temp_winding", rows);
     if (data.contains("temp_magnet")) m.temp_magnet = column_of(data["temp_magnet"], "temp_magnet", rows);
+    if (data.contains("theta_m")) m.theta_m = column_of(data["theta_m"], "theta_m", rows);
     if (data.contains("segment")) {
         // Labels in order of first appearance, as the readers number them.
         const py::list labels = py::module_::import("numpy").attr("asarray")(data["segment"]).attr("astype")("str").attr("tolist")();
@@ -199,6 +200,7 @@ py::dict measurement_columns(const Measurement& m) {
     if (m.theta_e) out["theta_e"] = numpy_vector(*m.theta_e);
     if (m.temp_winding) out["temp_winding"] = numpy_vector(*m.temp_winding);
     if (m.temp_magnet) out["temp_magnet"] = numpy_vector(*m.temp_magnet);
+    if (m.theta_m) out["theta_m"] = numpy_vector(*m.theta_m);
     if (m.has_segments()) {
         py::list labels;
         for (Eigen::Index k = 0; k < m.segment.size(); ++k) labels.append(m.segment_labels[static_cast<std::size_t>(m.segment[k])]);
