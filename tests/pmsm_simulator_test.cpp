@@ -34,6 +34,31 @@ TEST_CASE("the ideal noise-free drive satisfies the steady-state model to roundi
     CHECK(r.cwiseAbs().maxCoeff() < 1e-8);
 }
 
+TEST_CASE("the logged shaft angle is the electrical one over the pole pairs, up to whole electrical turns", "[pmsm][simulator]") {
+    for (const bool device : {false, true}) {
+        INFO((device ? "device" : "averaged") << " plant");
+        DriveSimulation drive = quiet_drive({{"fwd", 20.0, 0.1, 0.0, 0.3, 200}, {"rev", -20.0, -0.1, -0.1, 0.3, 200}});
+        if (device) drive.device = DeviceSettings{};
+        drive.logging.shaft_angle = true;
+        const auto result = simulate(drive);
+        REQUIRE(result.data.theta_m);
+        for (Eigen::Index k = 0; k < result.data.size(); ++k) {
+            const double theta_m = (*result.data.theta_m)[k];
+            CHECK(std::abs(theta_m) <= std::numbers::pi);
+            CHECK(std::abs(wrap_angle(drive.motor.pole_pairs * theta_m - (*result.data.theta_e)[k])) < 1e-9);
+        }
+        // Within each segment the shaft turns as its speed says: 20 r/min one way, then the other.
+        for (std::size_t s = 0; s < result.segments.size(); ++s) {
+            const auto& rows = result.segments[s];
+            double travel = 0.0;
+            for (Eigen::Index k = rows.first_row + 1; k < rows.first_row + rows.rows; ++k)
+                travel += wrap_angle((*result.data.theta_m)[k] - (*result.data.theta_m)[k - 1]);
+            const double expected = drive.segments[s].speed_rpm * std::numbers::pi / 30.0 * static_cast<double>(rows.rows - 1) * drive.logging.period;
+            CHECK(travel == Approx(expected).epsilon(0.01));
+        }
+    }
+}
+
 TEST_CASE("steady state matches the analytic dq equations and the torque balance", "[pmsm][simulator]") {
     // A salient motor with friction, so the reluctance torque and the friction both matter.
     auto drive = quiet_drive({{"fwd", 12.0, 0.08, -0.15, 1.0, 40}, {"rev", -8.0, -0.05, -0.05, 1.0, 40}});

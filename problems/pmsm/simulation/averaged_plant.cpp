@@ -144,6 +144,7 @@ public:
         SensorReading r;
         r.current = Complex{i_a, (i_a + 2.0 * i_b) / std::numbers::sqrt3} + sensor_offset_;
         r.angle = wrap_angle(theta_true + angle_offset_);
+        r.shaft_angle = x_.theta_m;
         r.true_speed = static_cast<double>(spec_.motor.pole_pairs) * x_.omega_m;
         return r;
     }

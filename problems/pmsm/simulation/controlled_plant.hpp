@@ -17,6 +17,7 @@ struct Segment;
 struct SensorReading {
     Complex current;           // measured phase currents as an alpha-beta vector (A)
     double angle = 0.0;        // measured electrical angle (rad): the controller's frame
+    double shaft_angle = 0.0;  // measured mechanical angle of the shaft (rad, in [-pi, pi)), what an absolute encoder logs
     double true_speed = 0.0;   // electrical speed (rad/s); used only before the encoder has a previous angle
 };
 

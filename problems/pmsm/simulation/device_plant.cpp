@@ -56,6 +56,7 @@ public:
         r.current = clarke(i_a, i_b, -i_a - i_b);
         const double shaft = count_angle_ > 0 ? std::floor(x_.theta_m / count_angle_) * count_angle_ : x_.theta_m;
         r.angle = wrap_angle(pole_pairs_ * shaft + device_.encoder.offset);
+        r.shaft_angle = wrap_angle(shaft);
         r.true_speed = pole_pairs_ * x_.omega_m;
         return r;
     }

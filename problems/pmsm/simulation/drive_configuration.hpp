@@ -40,6 +40,7 @@ struct Logging {
     double period = 0.4e-3;       // s, a multiple of the control period
     double filter_cutoff = 0.0;   // Hz, first-order low-pass on the logged signals (0: none)
     bool theta = true;            // log the controller's angle theta_e
+    bool shaft_angle = false;     // log the encoder's mechanical angle theta_m
     bool time = true;             // log t
     bool temperatures = false;    // log temp_winding and temp_magnet
 };

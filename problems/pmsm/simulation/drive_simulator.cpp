@@ -66,6 +66,7 @@ SimulationResult simulate(const DriveSimulation& spec) {
     m.omega_e.resize(total_samples);
     if (spec.logging.time) m.t.emplace(total_samples);
     if (spec.logging.theta) m.theta_e.emplace(total_samples);
+    if (spec.logging.shaft_angle) m.theta_m.emplace(total_samples);
     if (spec.logging.temperatures) {
         m.temp_winding.emplace(total_samples);
         m.temp_magnet.emplace(total_samples);
@@ -109,6 +110,7 @@ SimulationResult simulate(const DriveSimulation& spec) {
                 m.omega_e[row] = w_f;
                 if (m.t) (*m.t)[row] = t;
                 if (m.theta_e) (*m.theta_e)[row] = reading.angle;
+                if (m.theta_m) (*m.theta_m)[row] = reading.shaft_angle;
                 if (m.temp_winding) {
                     const Temperatures temperatures = plant->temperatures(t);
                     (*m.temp_winding)[row] = temperatures.winding + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);

@@ -430,11 +430,12 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
     {
         const auto& t = subtable(file, root, "logging");
         TableReader r(file, t, "logging", 0);
-        r.allow_only({"period", "filter_cutoff", "theta", "time", "temperatures"});
+        r.allow_only({"period", "filter_cutoff", "theta", "theta_m", "time", "temperatures"});
         auto& l = sim.logging;
         l.period = r.number("period", l.period, 0.0, 1e3, true);
         l.filter_cutoff = r.number("filter_cutoff", l.filter_cutoff, 0.0, 1e9);
         l.theta = r.boolean("theta", l.theta);
+        l.shaft_angle = r.boolean("theta_m", l.shaft_angle);
         l.time = r.boolean("time", l.time);
         if (const auto* n = t.get("period")) period_line = line_of(*n);
     }
@@ -537,6 +538,8 @@ nlohmann::ordered_json simulation_sidecar(const DriveSimulation& spec, const Sim
                   {"position_gain", c.position_gain}, {"current_limit", c.current_limit}};
     j["logging"] = {{"period", spec.logging.period}, {"filter_cutoff", spec.logging.filter_cutoff},
                     {"theta", spec.logging.theta}, {"time", spec.logging.time}, {"temperatures", spec.logging.temperatures}};
+    // Written only when logged, so that the sidecars of profiles that never log it stay as they were.
+    if (spec.logging.shaft_angle) j["logging"]["theta_m"] = true;
     j["noise"] = {{"current", spec.noise.current}, {"speed", spec.noise.speed}, {"voltage", spec.noise.voltage},
                   {"temperature", spec.noise.temperature}};
     auto points = [](const TemperatureProfile& p) {
