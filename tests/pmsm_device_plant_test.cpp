@@ -216,6 +216,37 @@ TEST_CASE("magnet flux harmonics 5 and 7 make a 6th harmonic in dq", "[pmsm][dev
     });
 }
 
+TEST_CASE("rotor eccentricity makes a harmonic at mechanical order 1 in dq", "[pmsm][device_plant]") {
+    // psi_d links psi_f (1 + e cos x), x = theta_m + phi: on u_q its EMF w_e psi_f e cos x, on u_d its
+    // change d/dt = -w_m psi_f e sin x. As a space vector in e^{+-jx}:
+    // j psi_f e [(w_e + w_m) e^{jx} + (w_e - w_m) e^{-jx}] / 2. The speed loop answers the torque's
+    // once-per-turn ripple with i_q, which the base model follows from the logged currents.
+    const double e = 0.03, phi = 0.6;
+    // 1.4 s windows: more than a turn at 45 r/min.
+    auto drive = device_drive({{"fwd", 45.0, 0.10, -0.15, 0.6, 3500}, {"rev", -45.0, -0.08, 0.0, 0.6, 3500}});
+    drive.device->rotor_flux.eccentricity = e;
+    drive.device->rotor_flux.eccentricity_phase = phi;
+    drive.logging.shaft_angle = true;
+    const auto result = simulate(drive);
+    REQUIRE(result.data.theta_m);
+    each_segment(drive, result, [&](const Segment&, const SegmentRows& rows, double w) {
+        const auto r = base_residual(result.data, drive.motor, rows);
+        Eigen::MatrixXcd a(static_cast<Eigen::Index>(r.size()), 3);
+        Eigen::VectorXcd b(a.rows());
+        for (Eigen::Index k = 0; k < a.rows(); ++k) {
+            const double theta_m = (*result.data.theta_m)[rows.first_row + k];
+            a.row(k) << 1.0, std::polar(1.0, theta_m), std::polar(1.0, -theta_m);
+            b[k] = r[static_cast<std::size_t>(k)];
+        }
+        const Eigen::VectorXcd c = a.colPivHouseholderQr().solve(b);
+        const double w_m = w / drive.motor.pole_pairs, psi = drive.motor.psi_f;
+        const Complex plus = Complex{0.0, 0.5 * psi * e * (w + w_m)} * std::polar(1.0, phi);
+        const Complex minus = Complex{0.0, 0.5 * psi * e * (w - w_m)} * std::polar(1.0, -phi);
+        CHECK(std::abs(c[1] - plus) < 0.05 * std::abs(plus));
+        CHECK(std::abs(c[2] - minus) < 0.05 * std::abs(minus));
+    });
+}
+
 TEST_CASE("without compensation the computation delay rotates the applied voltage by 1.5 w T_s", "[pmsm][device_plant]") {
     // Sampled at the start of period k, applied over period k + 1: on average 1.5 T_s later, when the
     // rotor has turned 1.5 w T_s further; the logged reference leads the machine's voltage by that.
@@ -465,6 +496,11 @@ TEST_CASE("bad device settings are refused naming file, line and field", "[pmsm]
         {"dead time of a quarter carrier", device + "[plant.inverter]\ndead_time = 30e-6\n", 4, "plant.inverter.dead_time", "quarter"},
         {"a triplen flux harmonic", device + "[plant.rotor_flux]\nharmonics = [{ order = 9, amplitude = 0.01 }]\n", 4,
          "plant.rotor_flux.harmonics[1].order", "multiple of 3"},
+        {"an eccentricity beyond half the magnet flux", device + "[plant.rotor_flux]\neccentricity = 0.6\n", 4,
+         "plant.rotor_flux.eccentricity", "[0, 0.5]"},
+        {"an eccentricity phase beyond pi", device + "[plant.rotor_flux]\neccentricity_phase = 4.0\n", 4,
+         "plant.rotor_flux.eccentricity_phase", "must lie in"},
+        {"a shaft angle logged as a number", "[logging]\ntheta_m = 1\n", 2, "logging.theta_m", "true or false"},
     };
     for (const auto& r : refusals) {
         INFO(r.what);

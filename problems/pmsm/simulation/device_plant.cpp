@@ -41,7 +41,7 @@ public:
         update_coefficients();
         // At rest the stator links the magnet flux only.
         const Magnet magnet = magnet_flux(0.0);
-        x_.psi = inverse_park(flux_->flux({0.0, 0.0}, psi_f_), 0.0) + magnet.harmonic_flux;
+        x_.psi = inverse_park(flux_->flux({0.0, 0.0}, eccentric_magnet_flux(0.0)), 0.0) + magnet.harmonic_flux;
     }
 
     SensorReading sense(double, Rng& rng) override {
@@ -127,6 +127,14 @@ private:
         return m;
     }
 
+    // The magnet fundamental the stator links at shaft angle theta_m. An eccentric rotor turns its
+    // smallest air gap with it, so the gap under the poles, and the flux they drive through the
+    // winding, rises and falls once per turn: psi_f (1 + e cos(theta_m + phi)).
+    double eccentric_magnet_flux(double theta_m) const {
+        const auto& r = device_.rotor_flux;
+        return r.eccentricity > 0.0 ? psi_f_ * (1.0 + r.eccentricity * std::cos(theta_m + r.eccentricity_phase)) : psi_f_;
+    }
+
     // Currents and torque of a state: the harmonic flux is the magnet's, the rest is the machine's
     // dq flux (magnet fundamental and armature) in the rotor frame.
     Electrical electrical(const State& x) {
@@ -134,7 +142,7 @@ private:
         const Magnet magnet = magnet_flux(theta);
         const Complex rotor = std::polar(1.0, theta);
         const Complex psi_dq = (x.psi - magnet.harmonic_flux) * std::conj(rotor);
-        guess_ = flux_->current(psi_dq, psi_f_, guess_);
+        guess_ = flux_->current(psi_dq, eccentric_magnet_flux(x.theta_m), guess_);
         Electrical e;
         e.current = guess_ * rotor;
         e.phase = inverse_clarke(e.current);
@@ -142,6 +150,10 @@ private:
         // p sum_x i_x d psi_x / d theta.
         e.torque = electromagnetic_torque(pole_pairs_, psi_dq, guess_);
         for (std::size_t k = 0; k < 3; ++k) e.torque += pole_pairs_ * e.phase[k] * magnet.harmonic_slope[k];
+        // The co-energy 1.5 psi_f(theta_m) i_d changes with the shaft angle at fixed phase currents
+        // when the rotor is eccentric: 1.5 i_d d psi_f / d theta_m more (exact for linear iron).
+        if (const auto& r = device_.rotor_flux; r.eccentricity > 0.0)
+            e.torque -= 1.5 * guess_.real() * psi_f_ * r.eccentricity * std::sin(x.theta_m + r.eccentricity_phase);
         return e;
     }
 

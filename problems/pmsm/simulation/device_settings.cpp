@@ -1,6 +1,7 @@
 #include "problems/pmsm/simulation/device_settings.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -27,6 +28,11 @@ void check_device_settings(const DeviceSettings& device, const DriveControl& con
             throw std::invalid_argument(fmt::format(
                 "rotor_flux harmonic order {} amplitude {}: orders are odd, not multiples of 3, >= 5; amplitudes >= 0",
                 h.order, h.amplitude));
+    if (!(device.rotor_flux.eccentricity >= 0 && device.rotor_flux.eccentricity <= 0.5))
+        throw std::invalid_argument(fmt::format("rotor_flux.eccentricity {} must lie in [0, 0.5] (a relative modulation of the magnet flux)",
+                                                device.rotor_flux.eccentricity));
+    if (!(std::abs(device.rotor_flux.eccentricity_phase) <= std::numbers::pi))
+        throw std::invalid_argument("rotor_flux.eccentricity_phase must lie in [-pi, pi]");
     if (!(device.saturation.saturation_current >= 0))
         throw std::invalid_argument("saturation.saturation_current must not be negative");
     const auto& th = device.thermal;

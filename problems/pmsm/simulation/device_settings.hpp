@@ -34,6 +34,11 @@ struct FluxHarmonic {
 
 struct RotorFluxDevice {
     std::vector<FluxHarmonic> harmonics;
+    // Dynamic eccentricity: the rotor turns about an axis off its own centre, so its smallest air
+    // gap turns with it and the magnet flux linked rises and falls once per mechanical turn,
+    // psi_f (1 + eccentricity cos(theta_m + eccentricity_phase)).
+    double eccentricity = 0.0;        // relative modulation of psi_f, [0, 0.5]
+    double eccentricity_phase = 0.0;  // rad of the shaft angle, [-pi, pi]
 };
 
 // Saturation of the stator iron: the permeability falls with the armature's magnetic energy

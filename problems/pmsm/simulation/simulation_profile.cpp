@@ -244,13 +244,16 @@ InverterDevice read_inverter(const std::string& file, const toml::table& plant, 
     return inv;
 }
 
-std::vector<FluxHarmonic> read_flux_harmonics(const std::string& file, const toml::table& plant) {
+RotorFluxDevice read_rotor_flux(const std::string& file, const toml::table& plant) {
     const auto& t = device_subtable(file, plant, "rotor_flux");
     TableReader r(file, t, "plant.rotor_flux", 0);
-    r.allow_only({"harmonics"});
-    std::vector<FluxHarmonic> harmonics;
+    r.allow_only({"harmonics", "eccentricity", "eccentricity_phase"});
+    RotorFluxDevice rotor;
+    rotor.eccentricity = r.number("eccentricity", 0.0, 0.0, 0.5);
+    rotor.eccentricity_phase = r.number("eccentricity_phase", 0.0, -std::numbers::pi, std::numbers::pi);
+    auto& harmonics = rotor.harmonics;
     const toml::node* n = t.get("harmonics");
-    if (!n) return harmonics;
+    if (!n) return rotor;
     const toml::array* list = n->as_array();
     if (!list) throw InputError(file, line_of(*n), "plant.rotor_flux.harmonics", "expects a list of {order, amplitude, phase} tables");
     for (std::size_t k = 0; k < list->size(); ++k) {
@@ -269,7 +272,7 @@ std::vector<FluxHarmonic> read_flux_harmonics(const std::string& file, const tom
         harmonic.phase = h.number("phase", 0.0, -std::numbers::pi, std::numbers::pi);
         harmonics.push_back(harmonic);
     }
-    return harmonics;
+    return rotor;
 }
 
 ThermalNetwork read_thermal_network(const std::string& file, const toml::table& plant) {
@@ -327,7 +330,7 @@ std::optional<DeviceSettings> read_plant(const std::string& file, const toml::ta
         d.encoder.lines = r.integer("lines", 0, 0, 1'000'000'000);
         d.encoder.offset = r.number("offset", 0.0, -std::numbers::pi, std::numbers::pi);
     }
-    d.rotor_flux.harmonics = read_flux_harmonics(file, plant);
+    d.rotor_flux = read_rotor_flux(file, plant);
     {
         TableReader r(file, device_subtable(file, plant, "saturation"), "plant.saturation", 0);
         r.allow_only({"saturation_current"});
@@ -364,7 +367,8 @@ nlohmann::ordered_json device_sidecar(const DeviceSettings& d) {
                           {"diode_drop", inv.diode_drop}, {"switch_resistance", inv.switch_resistance},
                           {"diode_resistance", inv.diode_resistance}, {"delay_compensation", inv.delay_compensation}}},
             {"encoder", {{"lines", d.encoder.lines}, {"offset", d.encoder.offset}}},
-            {"rotor_flux", {{"harmonics", harmonics}}},
+            {"rotor_flux", {{"harmonics", harmonics}, {"eccentricity", d.rotor_flux.eccentricity},
+                            {"eccentricity_phase", d.rotor_flux.eccentricity_phase}}},
             {"saturation", {{"saturation_current", d.saturation.saturation_current}}},
             {"current_sensors", {{"offset_a", cs.offset_a}, {"offset_b", cs.offset_b}, {"gain_a", cs.gain_a}, {"gain_b", cs.gain_b}}},
             {"thermal", {{"enabled", th.enabled}, {"winding_capacity", th.winding_capacity}, {"magnet_capacity", th.magnet_capacity},
