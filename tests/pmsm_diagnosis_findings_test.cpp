@@ -192,3 +192,60 @@ TEST_CASE("a partial candidate's sentence agrees with the recommended path", "[p
     f = findings_of(none, none.lack_of_fit, 0.25);
     CHECK(says(f, alone + "."));
 }
+
+namespace {
+
+// A harmonic at mechanical order 1 left by the model, against the logged angle or the integrated one.
+MechanicalHarmonic once_per_turn(bool logged) {
+    MechanicalHarmonic h;
+    h.order = 1;
+    h.pole_pairs = 16;
+    h.amplitude = {0.004, 0.066};
+    h.amplitude_standard_error = {0.001, 0.002};
+    if (logged) h.phase = Eigen::Vector2d(-1.0, 0.6);
+    h.phase_standard_error = {0.25, 0.03};
+    h.significant = true;
+    h.segments = 6;
+    return h;
+}
+
+const std::string* finding_with(const std::vector<std::string>& findings, const std::string& text) {
+    const auto it = std::find_if(findings.begin(), findings.end(), [&](const std::string& f) { return f.find(text) != std::string::npos; });
+    return it == findings.end() ? nullptr : &*it;
+}
+
+}  // namespace
+
+TEST_CASE("a harmonic at a mechanical order is named with its order, amplitude, phase and causes", "[pmsm][diagnosis][findings]") {
+    Diagnosis d = diagnosis_of_base();
+    d.lack_of_fit.significant = true;
+    d.not_in_library = true;
+    d.path.back().at_noise_floor = false;
+    d.mechanical_left = {once_per_turn(true)};
+    const auto f = findings_of(d, d.lack_of_fit, 0.25);
+    const std::string* named = finding_with(f, "harmonic at mechanical order 1");
+    REQUIRE(named);
+    CHECK_THAT(*named, Catch::StartsWith("A harmonic at mechanical order 1 (once per turn, 1/16 of the electrical frequency) is left in the residual: "
+                                         "amplitude 0.066 V on u_q and 0.004 V on u_d (± 0.002 V)"));
+    CHECK_THAT(*named, Catch::Contains("phase 0.60 ± 0.03 rad against the logged mechanical angle"));
+    CHECK_THAT(*named, Catch::Contains("rotor eccentricity, a bent shaft or a load with a once-per-turn torque"));
+
+    d.mechanical_left = {once_per_turn(false)};
+    const std::string* integrated = finding_with(findings_of(d, d.lack_of_fit, 0.25), "harmonic at mechanical order 1");
+    REQUIRE(integrated);
+    CHECK_THAT(*integrated, Catch::Contains("its phase is per segment"));
+    CHECK_THAT(*integrated, !Catch::Contains("rad against"));
+}
+
+TEST_CASE("a mechanical-order harmonic under the noise floor's tolerance is called small, not a missing effect", "[pmsm][diagnosis][findings]") {
+    Diagnosis d = diagnosis_of_base();
+    d.path.back().at_noise_floor = true;
+    d.mechanical_left = {once_per_turn(true)};
+    const auto f = findings_of(d, d.lack_of_fit, 0.25);
+    const std::string* named = finding_with(f, "harmonic at mechanical order 1");
+    REQUIRE(named);
+    CHECK_THAT(*named, Catch::StartsWith("A small harmonic at mechanical order 1"));
+    CHECK_THAT(*named, Catch::Contains("so the verdict stands"));
+    CHECK_THAT(*named, !Catch::Contains("No library effect has this signature"));
+    CHECK_FALSE(finding_with(f, "missing effect is not in the library"));
+}

@@ -1,6 +1,9 @@
 // The lack-of-fit test alone (problems/pmsm/diagnosis/lack_of_fit.hpp) on residuals made by hand: its
-// p-value on pure noise, planted segment means and a planted harmonic of the electrical angle.
+// p-value on pure noise, planted segment means, a planted harmonic of the electrical angle and one at
+// a mechanical order (against the logged and the integrated shaft angle).
 #include <catch2/catch.hpp>
+
+#include <algorithm>
 
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
 #include "problems/pmsm/diagnosis/verdict.hpp"
@@ -120,4 +123,127 @@ TEST_CASE("the chi-squared survival function", "[pmsm][diagnosis][lack_of_fit]")
     CHECK(chi_squared_survival(2.0 * std::log(2.0), 2.0) == Approx(0.5));  // exp(-x / 2) for two degrees of freedom
     CHECK(chi_squared_survival(-1.0, 3.0) == 1.0);
     CHECK(chi_squared_survival(5.0, 0.0) == 1.0);
+}
+
+namespace {
+
+// Segments of a shaft turning `turns` turns each, on a machine of 4 pole pairs (mechanical orders 1,
+// 2 and 3 tested, 4 an electrical one), with theta_m logged when `logged`.
+TurningShaft shaft_log(bool logged, Eigen::Index rows = 1200, double turns = 2.0) {
+    auto shaft = turning_shaft(6, rows, 1e-3, 4, turns);
+    if (logged) {
+        shaft.data.theta_m = Eigen::VectorXd(shaft.data.size());
+        for (Eigen::Index k = 0; k < shaft.data.size(); ++k) (*shaft.data.theta_m)[k] = wrap_angle(shaft.exact[k]);
+    }
+    return shaft;
+}
+
+const MechanicalHarmonic& order_of(const LackOfFit& l, int order) {
+    const auto it = std::find_if(l.mechanical_harmonics.begin(), l.mechanical_harmonics.end(), [&](const auto& h) { return h.order == order; });
+    REQUIRE(it != l.mechanical_harmonics.end());
+    return *it;
+}
+
+}  // namespace
+
+TEST_CASE("a once-per-turn harmonic against the logged shaft angle: its amplitude and phase within their standard errors",
+          "[pmsm][diagnosis][lack_of_fit][mechanical]") {
+    const auto shaft = shaft_log(true);
+    const Eigen::Index n = shaft.data.size();
+    const double amplitude = 0.003, phase = 0.8, sigma = 0.01;
+    std::mt19937_64 random(11);
+    Eigen::VectorXd residual = white_residual(n, sigma, sigma, random);
+    // An EMF of the shaft angle: it turns sign with the speed, and the segments turn both ways.
+    for (Eigen::Index k = 0; k < n; ++k) residual[n + k] += (shaft.data.omega_e[k] > 0.0 ? 1.0 : -1.0) * amplitude * std::cos(shaft.exact[k] + phase);
+    const LackOfFit l = lack_of_fit(shaft.data, fit_with_residual(shaft.data, residual), residual, known_noise(sigma), shaft_angle(shaft.data, 4));
+    REQUIRE(l.mechanical_harmonics.size() == 3);  // 1, 2, 3; 4 turns with the electrical angle
+    for (const auto& h : l.mechanical_harmonics) CHECK(h.order != 4);
+    const MechanicalHarmonic& once = order_of(l, 1);
+    CHECK(once.significant);
+    CHECK(once.segments == 6);
+    REQUIRE(once.phase);
+    // One component of a harmonic over whole turns of n rows: sigma sqrt(2 / n).
+    CHECK(once.amplitude_standard_error[1] == Approx(sigma * std::sqrt(2.0 / static_cast<double>(n))).epsilon(0.1));
+    CHECK(std::abs(once.amplitude[1] - amplitude) < 4.0 * once.amplitude_standard_error[1]);
+    CHECK(std::abs((*once.phase)[1] - phase) < 4.0 * once.phase_standard_error[1]);
+    CHECK(once.amplitude[0] < 5.0 * once.amplitude_standard_error[0]);
+    CHECK_FALSE(order_of(l, 2).significant);
+    CHECK_FALSE(order_of(l, 3).significant);
+    CHECK(l.significant);
+    CHECK_THAT(l.signature, Catch::Contains("harmonic at mechanical order 1 (1/4 of the electrical frequency"));
+    CHECK_THAT(l.mechanical_angle, Catch::Contains("the logged theta_m"));
+}
+
+TEST_CASE("a once-per-turn harmonic against the integrated angle: its amplitude, its phase per segment",
+          "[pmsm][diagnosis][lack_of_fit][mechanical]") {
+    const auto shaft = shaft_log(false);
+    const Eigen::Index n = shaft.data.size();
+    const double amplitude = 0.004, sigma = 0.01;
+    std::mt19937_64 random(12);
+    Eigen::VectorXd residual = white_residual(n, sigma, sigma, random);
+    // Against the true shaft angle, whose zero in each segment the integrated angle does not know.
+    for (Eigen::Index k = 0; k < n; ++k) residual[n + k] += amplitude * std::cos(shaft.exact[k] - 0.4);
+    const LackOfFit l = lack_of_fit(shaft.data, fit_with_residual(shaft.data, residual), residual, known_noise(sigma), shaft_angle(shaft.data, 4));
+    const MechanicalHarmonic& once = order_of(l, 1);
+    CHECK(once.significant);
+    CHECK_FALSE(once.phase);
+    // Each segment's component has sigma sqrt(2 / (n / 6)); their mean over six segments a sqrt 6 less.
+    CHECK(once.amplitude_standard_error[1] == Approx(sigma * std::sqrt(2.0 / static_cast<double>(n))).epsilon(0.1));
+    CHECK(std::abs(once.amplitude[1] - amplitude) < 4.0 * once.amplitude_standard_error[1]);
+    CHECK_FALSE(order_of(l, 2).significant);
+    CHECK_THAT(l.signature, Catch::Contains("phase per segment"));
+    CHECK_THAT(l.mechanical_angle, Catch::Contains("integrated from omega_e"));
+}
+
+TEST_CASE("on pure noise the mechanical orders' p-values are uniform and false alarms as rare as the level",
+          "[pmsm][diagnosis][lack_of_fit][mechanical]") {
+    for (const bool logged : {true, false}) {
+        INFO((logged ? "logged" : "integrated") << " angle");
+        const auto shaft = shaft_log(logged, 400, 1.3);
+        const ShaftAngle angle = shaft_angle(shaft.data, 4);
+        int below_tenth = 0, significant = 0;
+        constexpr int seeds = 200;
+        for (int seed = 0; seed < seeds; ++seed) {
+            std::mt19937_64 random(static_cast<std::uint64_t>(5000 + seed));
+            const Eigen::VectorXd residual = white_residual(shaft.data.size(), 0.01, 0.01, random);
+            const LackOfFit l = lack_of_fit(shaft.data, fit_with_residual(shaft.data, residual), residual, known_noise(0.01), angle);
+            REQUIRE(l.mechanical_harmonics.size() == 3);
+            below_tenth += order_of(l, 1).p_value < 0.1 ? 1 : 0;
+            for (const auto& h : l.mechanical_harmonics) significant += h.significant ? 1 : 0;
+        }
+        // The p of the more significant of two independent axes: below 0.1 with 1 - 0.9^2 = 0.19.
+        // Binomial(200, 0.19): three standard deviations either side.
+        CHECK(below_tenth >= 21);
+        CHECK(below_tenth <= 55);
+        // Each order's test at 1e-3 / 30 (Bonferroni over 12 electrical and 3 mechanical orders, two
+        // axes each): 0.02 expected false alarms over 200 logs and 3 orders.
+        CHECK(significant <= 1);
+    }
+}
+
+TEST_CASE("mechanical orders are tested only on segments that turn a whole period, and only with the pole pairs",
+          "[pmsm][diagnosis][lack_of_fit][mechanical]") {
+    std::mt19937_64 random(13);
+    SECTION("a segment turning half a turn carries order 2 but not order 1") {
+        const auto shaft = shaft_log(true, 600, 0.6);
+        const Eigen::VectorXd residual = white_residual(shaft.data.size(), 0.01, 0.01, random);
+        const LackOfFit l = lack_of_fit(shaft.data, fit_with_residual(shaft.data, residual), residual, known_noise(0.01), shaft_angle(shaft.data, 4));
+        for (const auto& h : l.mechanical_harmonics) CHECK(h.order >= 2);
+        CHECK(order_of(l, 2).segments == 6);
+    }
+    SECTION("segments turning a tenth of a turn carry none, and say so") {
+        const auto shaft = shaft_log(true, 600, 0.1);
+        const Eigen::VectorXd residual = white_residual(shaft.data.size(), 0.01, 0.01, random);
+        const LackOfFit l = lack_of_fit(shaft.data, fit_with_residual(shaft.data, residual), residual, known_noise(0.01), shaft_angle(shaft.data, 4));
+        CHECK(l.mechanical_harmonics.empty());
+        CHECK_THAT(l.mechanical_angle, Catch::Contains("no segment spans a whole period") && Catch::Contains("0.1 turn"));
+    }
+    SECTION("without the pole pairs the electrical orders alone, saying why") {
+        auto shaft = shaft_log(false, 600, 2.0);
+        const Eigen::VectorXd residual = white_residual(shaft.data.size(), 0.01, 0.01, random);
+        const LackOfFit l = lack_of_fit(shaft.data, fit_with_residual(shaft.data, residual), residual, known_noise(0.01), shaft_angle(shaft.data, 0));
+        CHECK(l.mechanical_harmonics.empty());
+        CHECK(l.harmonics.size() == static_cast<std::size_t>(harmonic_orders));
+        CHECK_THAT(l.mechanical_angle, Catch::StartsWith("not tested: the pole-pair count is not known"));
+    }
 }

@@ -30,6 +30,41 @@ inline Measurement segmented_rows(int segments, Eigen::Index rows, double turns_
     return m;
 }
 
+// A shaft turning through segments of a drive, with its exact angle: `segments` segments of `rows`
+// rows `dt` apart, each starting at another shaft angle and turning `turns` turns (alternately
+// forwards and backwards) at a speed that ripples by a tenth around its mean, three ripples a
+// segment. The rows log t (each segment after a gap of a second), omega_e and theta_e of a machine
+// of `pole_pairs`; `exact` is the shaft angle, unwrapped.
+struct TurningShaft {
+    Measurement data;
+    Eigen::VectorXd exact;
+    double third_derivative = 0.0;  // the largest |d^3 theta_m / dt^3| (rad/s^3)
+};
+inline TurningShaft turning_shaft(int segments, Eigen::Index rows, double dt, int pole_pairs, double turns) {
+    TurningShaft s;
+    s.data = segmented_rows(segments, rows);
+    const Eigen::Index n = s.data.size();
+    s.data.t = Eigen::VectorXd(n);
+    s.data.theta_e = Eigen::VectorXd(n);
+    s.exact = Eigen::VectorXd(n);
+    const double duration = static_cast<double>(rows) * dt, ripple = 3.0 * 2.0 * std::numbers::pi / duration;
+    for (int g = 0; g < segments; ++g) {
+        const double mean_speed = (g % 2 == 0 ? 1.0 : -1.0) * 2.0 * std::numbers::pi * turns / duration;
+        const double start_angle = 0.7 * g + 0.3, start_time = g * (duration + 1.0);
+        s.third_derivative = std::max(s.third_derivative, std::abs(0.1 * mean_speed * ripple * ripple));
+        for (Eigen::Index k = 0; k < rows; ++k) {
+            const Eigen::Index row = g * rows + k;
+            const double tau = static_cast<double>(k) * dt;
+            // theta_m = theta_0 + w tau + 0.1 w (1 - cos(W tau)) / W, whose derivative is w (1 + 0.1 sin(W tau)).
+            s.exact[row] = start_angle + mean_speed * tau + 0.1 * mean_speed * (1.0 - std::cos(ripple * tau)) / ripple;
+            s.data.omega_e[row] = pole_pairs * mean_speed * (1.0 + 0.1 * std::sin(ripple * tau));
+            (*s.data.t)[row] = start_time + tau;
+            (*s.data.theta_e)[row] = wrap_angle(pole_pairs * s.exact[row]);
+        }
+    }
+    return s;
+}
+
 // A fit of the base model, none of its parameters free, whose residual (u_d rows, then u_q rows) is
 // `residual`; residual_of returns it as it is. Its segments are `data`'s, with their mean residuals.
 inline ModelFit fit_with_residual(const Measurement& data, const Eigen::VectorXd& residual) {

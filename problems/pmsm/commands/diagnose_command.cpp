@@ -34,6 +34,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         auto data = read_data_option(*o, columns);
         pmsm::DiagnosisOptions options;
         options.fit = fit_options(*o);
+        options.pole_pairs = columns.pole_pairs.value_or(0);
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())

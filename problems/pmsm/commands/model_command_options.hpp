@@ -39,7 +39,7 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
     cmd->add_option("--columns", o.columns,
                     "the file's names and units for mhbench's columns, e.g. i_d=Id_meas[mA],omega_e=speed[rpm]");
     cmd->add_option("--columns-file", o.columns_file, "the same map as a TOML file (docs/data-format.md)");
-    cmd->add_option("--pole-pairs", o.pole_pairs, "pole-pair count, converting a speed in rpm to electrical rad/s")
+    cmd->add_option("--pole-pairs", o.pole_pairs, "pole-pair count: converts a speed in rpm to electrical rad/s; diagnose tells harmonics at mechanical orders from electrical ones with it")
         ->check(whole_number_in<int>(1, 1000));
     cmd->add_option("--model", o.model, model_help);
     cmd->add_option("--optimizer", o.optimizer, "optimizer searching the nonlinear effect parameters");

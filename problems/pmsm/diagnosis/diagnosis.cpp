@@ -16,6 +16,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     if (data.theta_e) out.columns.push_back("theta_e");
     if (data.temp_winding) out.columns.push_back("temp_winding");
     if (data.temp_magnet) out.columns.push_back("temp_magnet");
+    if (data.theta_m) out.columns.push_back("theta_m");
 
     // No fit keeps its residual: each is recomputed where it is needed (residual_of), so that a long
     // log's diagnosis holds no row-sized array but the data while it searches.
@@ -31,10 +32,12 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.pruned = search.pruned;
     out.noise = measure_noise(data, search, out.candidates);
 
-    ModelCheck check = check_model(data, spec, baseline, out.noise, options);
+    // Held for the whole diagnosis: one double a row, against the 800 bytes a row the rest takes.
+    const ShaftAngle shaft = shaft_angle(data, options.pole_pairs);
+    ModelCheck check = check_model(data, spec, baseline, out.noise, options, shaft);
     const auto proposals = experiment_proposals(data, check.segments);
     score_candidates(out.candidates, data, design, proposals, baseline.model, out.noise, check.folds);
-    PathTrace trace = trace_path(data, search, baseline.model, check.lack_of_fit, out.noise, options.floor_tolerance);
+    PathTrace trace = trace_path(data, search, baseline.model, check.lack_of_fit, out.noise, options.floor_tolerance, shaft);
     Recommendation r = recommend(spec, search, trace, check.lack_of_fit, design, proposals);
 
     out.model = std::move(baseline.model);
@@ -58,6 +61,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.incomplete = r.incomplete;
     const ModelFit& recommended = out.recommended.text() == out.model.spec.text() ? out.model : out.path.back().fit;
     out.detection_limits = detection_limits(design, data.size(), recommended, screen.library, out.noise);
+    for (const auto& h : trace.left.back().mechanical_harmonics)
+        if (h.significant) out.mechanical_left.push_back(h);
     out.findings = findings_of(out, trace.left.back(), options.floor_tolerance);
     return out;
 }

@@ -29,6 +29,9 @@ struct DiagnosisOptions {
     // with less than this fraction of the noise power (the steady-state model's own error on effects
     // that make the currents ripple, docs/effects.md).
     double floor_tolerance = 0.25;
+    // The machine's pole pairs (0: not known), which tell a harmonic at a mechanical order k/p of the
+    // electrical frequency from an electrical one (docs/diagnosis.md, "Harmonics at mechanical orders").
+    int pole_pairs = 0;
 };
 
 struct NoiseEstimate {
@@ -126,12 +129,34 @@ struct Harmonic {
     double p_value = 1.0;
 };
 
+// A harmonic of the shaft's mechanical angle at an order that is not an electrical one: something
+// that turns with the shaft (docs/diagnosis.md, "Harmonics at mechanical orders").
+struct MechanicalHarmonic {
+    int order = 0;                        // cycles per mechanical turn: order / pole_pairs of the electrical frequency
+    int pole_pairs = 0;
+    // V, d and q. With the logged angle the fitted amplitude; with the integrated one the rms over the
+    // segments of each one's own amplitude, less the share the noise adds to it.
+    Eigen::Vector2d amplitude{0.0, 0.0};
+    Eigen::Vector2d amplitude_standard_error{0.0, 0.0};  // V, of the amplitude under noise alone
+    // rad, u = s A cos(order theta_m + phase) against the logged theta_m's zero, s the sign of the
+    // speed (an EMF turns sign with it); none when the angle is integrated (its zero differs per segment).
+    std::optional<Eigen::Vector2d> phase;
+    Eigen::Vector2d phase_standard_error{0.0, 0.0};      // rad, standard error / amplitude
+    double standard_error = 0.0;          // V, of each amplitude component under noise alone (as Harmonic's)
+    double p_value = 1.0;                 // of the more significant axis
+    bool significant = false;             // beyond chance after Bonferroni over every harmonic tested
+    int segments = 0;                     // segments that span a whole period of it: only those carry it
+    Eigen::Index rows = 0;                // rows of those segments
+};
+
 struct LackOfFit {
     bool means_available = false;  // more segment-mean equations than free parameters
     double statistic = 0.0;        // sum over segments and axes of n_s mean^2 / long-run variance
     int dof = 0;
     double p_value = 1.0;
     std::vector<Harmonic> harmonics;  // when theta_e is logged
+    std::vector<MechanicalHarmonic> mechanical_harmonics;  // the orders tested (a shaft angle, segments spanning a period)
+    std::string mechanical_angle;     // how the shaft angle was had and which orders were tested, or why none (empty: not asked)
     bool significant = false;         // means or any harmonic beyond chance (p < 1e-3 after Bonferroni)
     double structure = 0.0;           // power of the significant structure (means, harmonics) relative to the noise's
     std::string signature;            // in words
@@ -198,6 +223,9 @@ struct Diagnosis {
     // size parameters this log would reveal.
     std::vector<DetectionLimit> detection_limits;
     std::vector<std::string> findings;   // plain statements, most important first
+    // The harmonics at mechanical orders that the last set of the path leaves beyond chance (the
+    // findings name them).
+    std::vector<MechanicalHarmonic> mechanical_left;
 
     // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
     // only when nothing the data show is left out of it (an interval assumes the residual is noise).

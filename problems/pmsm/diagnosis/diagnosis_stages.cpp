@@ -65,7 +65,7 @@ NoiseEstimate measure_noise(const Measurement& data, const SetSearch& search, co
 }
 
 ModelCheck check_model(const Measurement& data, const ModelSpec& spec, const Baseline& baseline, const NoiseEstimate& noise,
-                       const DiagnosisOptions& options) {
+                       const DiagnosisOptions& options, const ShaftAngle& shaft) {
     ModelCheck check;
     const ModelFit& model = baseline.model;
     check_base(model, check.base_problems);
@@ -81,7 +81,7 @@ ModelCheck check_model(const Measurement& data, const ModelSpec& spec, const Bas
         // One residual held at a time.
         Eigen::VectorXd storage;
         const Eigen::VectorXd& residual = residual_of(data, model, storage);
-        check.lack_of_fit = lack_of_fit(data, model, residual, noise);
+        check.lack_of_fit = lack_of_fit(data, model, residual, noise, shaft);
         apparent_values(*make_model(spec, data), model, residual, noise, check.segments, check.apparent_names);
     }
     check.drifts = drifts_of(check.segments, check.apparent_names);
@@ -134,7 +134,7 @@ void score_candidates(std::vector<Candidate>& candidates, const Measurement& dat
 }
 
 PathTrace trace_path(const Measurement& data, const SetSearch& search, const ModelFit& model, const LackOfFit& model_left,
-                     const NoiseEstimate& noise, double floor_tolerance) {
+                     const NoiseEstimate& noise, double floor_tolerance, const ShaftAngle& shaft) {
     PathTrace trace;
     trace.left.push_back(model_left);
     NoiseEstimate path_noise = noise;
@@ -153,7 +153,7 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
         step.effect = s.effect;
         step.delta_bic = k == 0 ? 0.0 : -likelihood_ratio(search.steps[k - 1].fit, step.fit, path_noise) + s.added_parameters * log_n;
         step.explained = explained_fraction(model, step.fit, floor_rss);
-        if (k > 0) trace.left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, storage), noise));
+        if (k > 0) trace.left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, storage), noise, shaft));
         const LackOfFit& left = trace.left[k];
         step.at_noise_floor = !left.significant || left.structure < floor_tolerance;
         step.structure = left.significant ? left.structure : 0.0;

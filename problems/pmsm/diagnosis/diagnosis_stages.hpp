@@ -10,6 +10,7 @@
 #include "problems/pmsm/diagnosis/design.hpp"
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
 #include "problems/pmsm/diagnosis/effect_set_search.hpp"
+#include "problems/pmsm/diagnosis/shaft_angle.hpp"
 
 namespace mhb::pmsm {
 
@@ -39,8 +40,8 @@ Measurement search_design(const Measurement& data, const FitOptions& options);
 // addition, whichever fits best (noise_of_best, with overdispersion).
 NoiseEstimate measure_noise(const Measurement& data, const SetSearch& search, const std::vector<Candidate>& candidates);
 
-// Where the model fails: its lack of fit, held-out prediction, plausibility, each segment's
-// conditions and apparent values, and the drifts of those.
+// Where the model fails: its lack of fit (with the harmonics of `shaft`), held-out prediction,
+// plausibility, each segment's conditions and apparent values, and the drifts of those.
 struct ModelCheck {
     LackOfFit lack_of_fit;
     std::vector<double> folds;  // the model's leave_one_segment_out (empty without)
@@ -51,7 +52,7 @@ struct ModelCheck {
     std::vector<Drift> drifts;
 };
 ModelCheck check_model(const Measurement& data, const ModelSpec& spec, const Baseline& baseline, const NoiseEstimate& noise,
-                       const DiagnosisOptions& options);
+                       const DiagnosisOptions& options, const ShaftAngle& shaft);
 
 // Fraction of `model`'s excess residual over `floor_rss` (the within-segment noise) that `fit` removes.
 double explained_fraction(const ModelFit& model, const ModelFit& fit, double floor_rss);
@@ -70,7 +71,7 @@ struct PathTrace {
     std::vector<LackOfFit> left;  // each step's lack of fit; left[0] is the model's
 };
 PathTrace trace_path(const Measurement& data, const SetSearch& search, const ModelFit& model, const LackOfFit& model_left,
-                     const NoiseEstimate& noise, double floor_tolerance);
+                     const NoiseEstimate& noise, double floor_tolerance, const ShaftAngle& shaft);
 
 struct Recommendation {
     ModelSpec recommended;

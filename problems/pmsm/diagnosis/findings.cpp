@@ -155,6 +155,38 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, std::ve
     }
 }
 
+// Harmonics at mechanical orders that the last set leaves: named with their order, size and phase,
+// and what turns with the shaft to make them. No library effect has this signature. Below the noise
+// floor's tolerance, where the verdict says the residual is at the floor (not "not in the
+// library"), they are named as small.
+void mechanical_findings(const Diagnosis& d, double floor_tolerance, std::vector<std::string>& f) {
+    const bool at_floor = !d.not_in_library && !d.path.empty() && d.path.back().at_noise_floor;
+    for (const auto& h : d.mechanical_left) {
+        if (!h.significant) continue;
+        const int axis = h.amplitude[1] >= h.amplitude[0] ? 1 : 0;
+        const char* names[] = {"u_d", "u_q"};
+        const std::string per_turn = h.order == 1 ? "once per turn" : fmt::format("{} times per turn", h.order);
+        const std::string phase =
+            h.phase ? fmt::format(", phase {:.2f} ± {:.2f} rad against the logged mechanical angle ({} = A cos({}theta_m + phase) turning forwards, of the other sign backwards)", (*h.phase)[axis],
+                                  h.phase_standard_error[axis], names[axis], h.order == 1 ? "" : std::to_string(h.order) + " ")
+                    : std::string("; its phase is per segment, since the mechanical angle is integrated from the speed and its zero in each "
+                                  "segment is unknown (log theta_m for a phase)");
+        const std::string causes = h.order == 1 ? "rotor eccentricity, a bent shaft or a load with a once-per-turn torque"
+                                                : fmt::format("an eccentric or bent shaft's harmonics, or a coupling, gear or load with {} events "
+                                                              "per turn", h.order);
+        const std::string named = fmt::format(
+            "harmonic at mechanical order {} ({}, {}/{} of the electrical frequency) {}: amplitude {:.3g} V on {} and {:.3g} V on {} "
+            "(± {:.2g} V), on the {} segment(s) that turn the shaft through a whole period of it{}",
+            h.order, per_turn, h.order, h.pole_pairs, at_floor ? "is significant in the residual" : "is left in the residual",
+            h.amplitude[axis], names[axis], h.amplitude[1 - axis], names[1 - axis], h.amplitude_standard_error[axis], h.segments, phase);
+        f.push_back(at_floor
+                        ? fmt::format("A small {}. With the rest of the structure it holds less than {:.2f} of the noise power, so the verdict "
+                                      "stands; if it grows, something turns with the shaft: {}.",
+                                      named, floor_tolerance, causes)
+                        : fmt::format("A {}. Something turns with the shaft: {}. No library effect has this signature.", named, causes));
+    }
+}
+
 // What an unidentifiable candidate would need, and what it does to the base parameters meanwhile.
 std::string hidden_effect_finding(const Candidate& c) {
     std::string text = c.effect + ": ";
@@ -212,6 +244,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(), other_missing_effect(d, c.effect)));
     for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
     unresolved_findings(d, left_by_last_step, f);
+    mechanical_findings(d, floor_tolerance, f);
     if (!d.model_intervals_valid())
         f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",
                                 d.model.spec.text(),

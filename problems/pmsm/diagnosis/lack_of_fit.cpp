@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <Eigen/Dense>
 #include <boost/math/distributions/chi_squared.hpp>
@@ -23,6 +24,17 @@ double chi_squared_survival(double statistic, double dof) {
 namespace {
 
 constexpr int orders = harmonic_orders;
+
+// cos and sin of harmonics 1..orders of theta, in pairs from out[0], by turning e^{j theta}.
+void write_angle_harmonics(double theta, double* out) {
+    const Complex rotor = std::polar(1.0, theta);
+    Complex turn = rotor;
+    for (int h = 0; h < orders; ++h) {
+        out[2 * h] = turn.real();
+        out[2 * h + 1] = turn.imag();
+        turn *= rotor;
+    }
+}
 
 struct HarmonicEquations {
     Eigen::MatrixXd gram;    // segments + 2 orders columns: one indicator per segment, cos and sin of each order
@@ -53,13 +65,7 @@ HarmonicEquations harmonic_normal_equations(const Measurement& data, const std::
         share.harmonic_residual.setZero();
         Harmonics x;
         for (Eigen::Index t = b * block_rows; t < std::min(n, (b + 1) * block_rows); ++t) {
-            const Complex rotor = std::polar(1.0, (*data.theta_e)[t]);
-            Complex turn = rotor;
-            for (int h = 0; h < orders; ++h) {
-                x[2 * h] = turn.real();
-                x[2 * h + 1] = turn.imag();
-                turn *= rotor;
-            }
+            write_angle_harmonics((*data.theta_e)[t], x.data());
             share.harmonic_gram.selfadjointView<Eigen::Lower>().rankUpdate(x);
             share.segment_harmonic.row(segment_of_row[static_cast<std::size_t>(t)]) += x.transpose();
             share.harmonic_residual.col(0) += residual[t] * x;
@@ -111,6 +117,207 @@ std::vector<Harmonic> angle_harmonics(const Measurement& data, const Eigen::Vect
     return out;
 }
 
+namespace {
+
+// The columns of one mechanical order in the joint fit: a pair (cos, sin) for the whole log with the
+// logged angle, one per carrying segment with the integrated one.
+struct OrderColumns {
+    int order = 0;
+    std::vector<Eigen::Index> first;     // first column of each pair
+    std::vector<std::size_t> segment;    // the segment each pair belongs to (integrated angle)
+    std::vector<std::size_t> carriers;   // segments that carry the order
+    Eigen::Index rows = 0;               // rows of those segments
+};
+
+// P(chi^2 > c' B^-1 c / variance) for coefficients c with covariance B per unit noise variance; 1
+// when B is not positive definite (the columns are not determined).
+double wald_p_value(const Eigen::MatrixXd& covariance, const Eigen::VectorXd& c, double variance) {
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) return 1.0;
+    return chi_squared_survival(c.dot(ldlt.solve(c)) / variance, static_cast<double>(c.size()));
+}
+
+}  // namespace
+
+MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::VectorXd& residual, const NoiseEstimate& noise, const ShaftAngle& shaft) {
+    MechanicalTest out;
+    if (!shaft.available()) {
+        out.note = "not tested: " + shaft.source;
+        return out;
+    }
+    const Eigen::Index n = data.size();
+    const auto ranges = segment_ranges(data);
+    const auto s = static_cast<Eigen::Index>(ranges.size());
+    const Eigen::VectorXd& angle = shaft.angle;
+    // How far the shaft turns in each segment (steps of less than half a turn a row), and which way.
+    std::vector<double> travel, direction;
+    for (const auto& r : ranges) {
+        double sum = 0.0;
+        for (Eigen::Index k = r.first + 1; k < r.first + r.rows; ++k) sum += wrap_angle(angle[k] - angle[k - 1]);
+        travel.push_back(std::abs(sum));
+        direction.push_back(sum < 0.0 ? -1.0 : 1.0);
+    }
+    const Eigen::Index electrical = data.theta_e ? 2 * orders : 0;
+    Eigen::Index column = s + electrical;
+    std::vector<OrderColumns> tested;
+    std::vector<int> coinciding;
+    for (int k = 1; k <= mechanical_orders; ++k) {
+        if (k % shaft.pole_pairs == 0) {
+            coinciding.push_back(k);
+            continue;
+        }
+        OrderColumns o;
+        o.order = k;
+        for (std::size_t g = 0; g < ranges.size(); ++g)
+            if (k * travel[g] >= 2.0 * std::numbers::pi) {
+                o.carriers.push_back(g);
+                o.rows += ranges[g].rows;
+            }
+        if (o.carriers.empty()) continue;
+        for (std::size_t pair = 0; pair < (shaft.logged ? 1 : o.carriers.size()); ++pair, column += 2) {
+            o.first.push_back(column);
+            o.segment.push_back(o.carriers[pair]);
+        }
+        tested.push_back(std::move(o));
+    }
+    const double longest = travel.empty() ? 0.0 : *std::max_element(travel.begin(), travel.end()) / (2.0 * std::numbers::pi);
+    if (tested.empty()) {
+        out.note = coinciding.size() == static_cast<std::size_t>(mechanical_orders)
+                       ? fmt::format("not tested: with {} pole pair(s) every mechanical order up to {} is an electrical one", shaft.pole_pairs,
+                                     mechanical_orders)
+                       : fmt::format("not tested: no segment spans a whole period of a mechanical order (the longest turns the shaft "
+                                     "{:.2g} turn); segments of a whole turn or more would show them (shaft angle: {})",
+                                     longest, shaft.source);
+        return out;
+    }
+    // The mechanical columns each segment's rows carry: (order, first column).
+    std::vector<std::vector<std::pair<int, Eigen::Index>>> active(ranges.size());
+    for (const auto& o : tested)
+        for (std::size_t c = 0; c < o.carriers.size(); ++c)
+            active[o.carriers[c]].emplace_back(o.order, o.first[shaft.logged ? 0 : c]);
+
+    // Normal equations of the joint fit, a block of rows at a time; the harmonic columns (electrical
+    // and mechanical) are stored after the segment indicators, and each row adds only its nonzero ones.
+    const Eigen::Index columns = column, harmonic_columns = columns - s;
+    struct Share {
+        Eigen::MatrixXd gram, segment_cross, moment;
+    };
+    constexpr Eigen::Index block_rows = 4096;
+    const Eigen::Index blocks = (n + block_rows - 1) / block_rows;
+    std::vector<Share> shares(static_cast<std::size_t>(blocks));
+    std::vector<std::size_t> segment_of_row(static_cast<std::size_t>(n));
+    for (std::size_t g = 0; g < ranges.size(); ++g)
+        std::fill_n(segment_of_row.begin() + ranges[g].first, ranges[g].rows, g);
+    tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index b) {
+        Share& share = shares[static_cast<std::size_t>(b)];
+        share.gram = Eigen::MatrixXd::Zero(harmonic_columns, harmonic_columns);
+        share.segment_cross = Eigen::MatrixXd::Zero(s, harmonic_columns);
+        share.moment = Eigen::MatrixXd::Zero(harmonic_columns, 2);
+        std::vector<double> x;
+        std::vector<Eigen::Index> at;
+        for (Eigen::Index t = b * block_rows; t < std::min(n, (b + 1) * block_rows); ++t) {
+            const std::size_t g = segment_of_row[static_cast<std::size_t>(t)];
+            x.assign(static_cast<std::size_t>(electrical), 0.0);
+            at.resize(static_cast<std::size_t>(electrical));
+            if (electrical > 0) write_angle_harmonics((*data.theta_e)[t], x.data());
+            for (Eigen::Index c = 0; c < electrical; ++c) at[static_cast<std::size_t>(c)] = c;
+            // With the logged angle one pair serves both directions, turned with the direction: what the
+            // voltage shows of something turning with the shaft is an EMF or an angle error, both
+            // proportional to the speed, so it changes sign with it and would cancel otherwise.
+            const double sign = shaft.logged ? direction[g] : 1.0;
+            for (const auto& [order, first] : active[g]) {
+                x.push_back(sign * std::cos(order * angle[t]));
+                x.push_back(sign * std::sin(order * angle[t]));
+                at.push_back(first - s);
+                at.push_back(first - s + 1);
+            }
+            for (std::size_t i = 0; i < x.size(); ++i) {
+                for (std::size_t j = 0; j < x.size(); ++j) share.gram(at[i], at[j]) += x[i] * x[j];
+                share.segment_cross(static_cast<Eigen::Index>(g), at[i]) += x[i];
+                share.moment(at[i], 0) += residual[t] * x[i];
+                share.moment(at[i], 1) += residual[n + t] * x[i];
+            }
+        }
+    });
+    Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(columns, columns), moment = Eigen::MatrixXd::Zero(columns, 2);
+    for (Eigen::Index k = 0; k < s; ++k) {
+        const auto& r = ranges[static_cast<std::size_t>(k)];
+        gram(k, k) = static_cast<double>(r.rows);
+        for (int a = 0; a < 2; ++a) moment(k, a) = residual.segment(a * n + r.first, r.rows).sum();
+    }
+    for (const auto& share : shares) {
+        gram.bottomRightCorner(harmonic_columns, harmonic_columns) += share.gram;
+        gram.topRightCorner(s, harmonic_columns) += share.segment_cross;
+        moment.bottomRows(harmonic_columns) += share.moment;
+    }
+    gram.bottomLeftCorner(harmonic_columns, s) = gram.topRightCorner(s, harmonic_columns).transpose();
+    const Eigen::MatrixXd inverse = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(gram).pseudoInverse();
+    const Eigen::MatrixXd coefficients = inverse * moment;
+
+    const double mean_long_run = 0.5 * (noise.long_run[0] + noise.long_run[1]);
+    std::vector<std::string> names;
+    for (const auto& o : tested) {
+        MechanicalHarmonic h;
+        h.order = o.order;
+        h.pole_pairs = shaft.pole_pairs;
+        h.segments = static_cast<int>(o.carriers.size());
+        h.rows = o.rows;
+        std::vector<Eigen::Index> cols;
+        for (const auto first : o.first) cols.insert(cols.end(), {first, first + 1});
+        const auto m = static_cast<Eigen::Index>(cols.size());
+        Eigen::MatrixXd covariance(m, m);
+        for (Eigen::Index i = 0; i < m; ++i)
+            for (Eigen::Index j = 0; j < m; ++j) covariance(i, j) = inverse(cols[static_cast<std::size_t>(i)], cols[static_cast<std::size_t>(j)]);
+        // Variance of one amplitude component per unit noise variance: the pair's, or with a pair per
+        // segment the mean of theirs weighted by the segments' rows.
+        double component_variance = 0.0, weights = 0.0;
+        for (std::size_t pair = 0; pair < o.first.size(); ++pair) {
+            const auto i = 2 * static_cast<Eigen::Index>(pair);
+            const double weight = static_cast<double>(ranges[o.segment[pair]].rows);
+            component_variance += weight * 0.5 * covariance.block(i, i, 2, 2).trace();
+            weights += weight;
+        }
+        component_variance /= weights;
+        h.standard_error = std::sqrt(component_variance) * mean_long_run;
+        double p_min = 1.0;
+        Eigen::Vector2d phase{0.0, 0.0};
+        for (int a = 0; a < 2; ++a) {
+            Eigen::VectorXd c(m);
+            for (Eigen::Index i = 0; i < m; ++i) c[i] = coefficients(cols[static_cast<std::size_t>(i)], a);
+            const double variance = noise.long_run[a] * noise.long_run[a];
+            p_min = std::min(p_min, wald_p_value(covariance, c, variance));
+            const double component_error = std::sqrt(component_variance * variance);
+            if (shaft.logged) {
+                // a cos(k theta) + b sin(k theta) = A cos(k theta + phase): A cos(phase) = a, A sin(phase) = -b.
+                h.amplitude[a] = std::hypot(c[0], c[1]);
+                phase[a] = std::atan2(-c[1], c[0]);
+                h.amplitude_standard_error[a] = component_error;
+            } else {
+                // Each segment's squared amplitude holds the noise's two components' variance besides the
+                // harmonic's; the mean over m segments has m times less of the amplitude's error.
+                double power = 0.0;
+                for (std::size_t pair = 0; pair < o.first.size(); ++pair) {
+                    const auto i = 2 * static_cast<Eigen::Index>(pair);
+                    const double noise_power = covariance.block(i, i, 2, 2).trace() * variance;
+                    power += static_cast<double>(ranges[o.segment[pair]].rows) * (c.segment(i, 2).squaredNorm() - noise_power);
+                }
+                h.amplitude[a] = std::sqrt(std::max(0.0, power / static_cast<double>(o.rows)));
+                h.amplitude_standard_error[a] = component_error / std::sqrt(static_cast<double>(o.first.size()));
+            }
+            h.phase_standard_error[a] = h.amplitude[a] > 0.0 ? h.amplitude_standard_error[a] / h.amplitude[a] : std::numbers::pi;
+        }
+        if (shaft.logged) h.phase = phase;
+        h.p_value = p_min;
+        out.harmonics.push_back(h);
+        names.push_back(std::to_string(o.order));
+    }
+    std::string orders_text;
+    for (std::size_t k = 0; k < names.size(); ++k) orders_text += (k == 0 ? "" : k + 1 == names.size() ? " and " : ", ") + names[k];
+    out.note = fmt::format("orders {} of the shaft angle tested, each on the segments that turn through a whole period of it (shaft angle: {})",
+                           orders_text, shaft.source);
+    return out;
+}
+
 std::string segment_means_signature(const Measurement& data, const ModelFit& fit, int a) {
     const auto& segments = fit.segments;
     std::vector<double> y;
@@ -153,7 +360,8 @@ std::string segment_means_signature(const Measurement& data, const ModelFit& fit
     return text;
 }
 
-LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen::VectorXd& residual, const NoiseEstimate& noise) {
+LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen::VectorXd& residual, const NoiseEstimate& noise,
+                      const ShaftAngle& shaft) {
     LackOfFit l;
     const Eigen::Index n = data.size();
     const auto ranges = segment_ranges(data);
@@ -175,9 +383,15 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
     std::vector<std::string> parts;
     if (means_significant)
         for (int a = 0; a < 2; ++a) parts.push_back(segment_means_signature(data, fit, a));
+    MechanicalTest mechanical;
+    if (!shaft.source.empty()) {
+        mechanical = mechanical_harmonics(data, residual, noise, shaft);
+        l.mechanical_angle = mechanical.note;
+    }
+    // One family: two tests (the axes) per order of either kind.
+    const double tests = 2.0 * static_cast<double>((data.theta_e ? orders : 0) + static_cast<int>(mechanical.harmonics.size()));
     if (data.theta_e) {
         l.harmonics = angle_harmonics(data, residual, noise);
-        const double tests = 2.0 * orders;
         for (const auto& harmonic : l.harmonics)
             if (harmonic.p_value < significance / tests) {
                 significant = true;
@@ -187,6 +401,19 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
                                             1e3 * harmonic.standard_error));
             }
     }
+    for (auto& h : mechanical.harmonics) {
+        h.significant = h.p_value < significance / tests;
+        if (!h.significant) continue;
+        significant = true;
+        structure_energy += 0.5 * static_cast<double>(h.rows) * h.amplitude.squaredNorm();
+        parts.push_back(fmt::format("harmonic at mechanical order {} ({}/{} of the electrical frequency; {:.3g} mV on u_d, {:.3g} mV on u_q, "
+                                    "noise {:.2g} mV{})",
+                                    h.order, h.order, h.pole_pairs, 1e3 * h.amplitude[0], 1e3 * h.amplitude[1], 1e3 * h.standard_error,
+                                    h.phase ? fmt::format(", phase {:.2f} rad on u_{} against theta_m", (*h.phase)[h.amplitude[1] >= h.amplitude[0]],
+                                                          h.amplitude[1] >= h.amplitude[0] ? 'q' : 'd')
+                                            : std::string(", phase per segment")));
+    }
+    l.mechanical_harmonics = std::move(mechanical.harmonics);
     l.significant = significant;
     const double noise_energy = static_cast<double>(n) * noise.sigma.squaredNorm();
     l.structure = noise_energy > 0.0 ? structure_energy / noise_energy : 0.0;

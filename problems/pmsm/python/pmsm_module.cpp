@@ -167,6 +167,7 @@ py::dict diagnose(py::handle data, const std::string& model, const std::string& 
     const auto spec = parse_model_spec(model);
     DiagnosisOptions options;
     options.fit = fit_options_of(optimizer, evaluations, seed, search_rows);
+    options.pole_pairs = pole_pairs;
     const auto measurement = measurement_of(data, settle, columns, pole_pairs);
     const auto limit = thread_limit(threads);
     std::optional<Diagnosis> diagnosis;

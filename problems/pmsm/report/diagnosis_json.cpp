@@ -23,6 +23,24 @@ json lack_of_fit_json(const LackOfFit& l) {
         h.push_back({{"order", x.order}, {"amplitude", {{"u_d", x.amplitude[0]}, {"u_q", x.amplitude[1]}}}, {"standard_error", x.standard_error},
                      {"p_value", x.p_value}});
     out["harmonics"] = h;
+    if (!l.mechanical_angle.empty()) {
+        out["mechanical_angle"] = l.mechanical_angle;
+        json m = json::array();
+        for (const auto& x : l.mechanical_harmonics) {
+            auto axes = [](const Eigen::Vector2d& v) { return json{{"u_d", v[0]}, {"u_q", v[1]}}; };
+            m.push_back({{"order", x.order},
+                         {"electrical_order", static_cast<double>(x.order) / x.pole_pairs},
+                         {"amplitude", axes(x.amplitude)},
+                         {"amplitude_standard_error", axes(x.amplitude_standard_error)},
+                         {"phase", x.phase ? axes(*x.phase) : json(nullptr)},
+                         {"phase_standard_error", x.phase ? axes(x.phase_standard_error) : json(nullptr)},
+                         {"standard_error", x.standard_error},
+                         {"p_value", x.p_value},
+                         {"significant", x.significant},
+                         {"segments", x.segments}});
+        }
+        out["mechanical_harmonics"] = m;
+    }
     return out;
 }
 

@@ -133,6 +133,18 @@ void add_where_it_fails(Document& doc, const Diagnosis& d, const Measurement& da
             harmonics.add_row({std::to_string(h.order), mv(h.amplitude[0]), mv(h.amplitude[1]), mv(h.standard_error), fmt::format("{:.2g}", h.p_value)});
         doc.add(std::move(harmonics));
     }
+    if (!l.mechanical_angle.empty()) {
+        doc.add(Paragraph{"Harmonics at mechanical orders (k/p of the electrical frequency) in the residual: " + l.mechanical_angle + "."});
+        if (!l.mechanical_harmonics.empty()) {
+            Table mechanical("harmonics at mechanical orders in the residual",
+                             {"order (per turn)", "of the electrical frequency", "u_d", "u_q", "noise", "phase on u_q (rad)", "p", "segments"});
+            for (const auto& h : l.mechanical_harmonics)
+                mechanical.add_row({std::to_string(h.order), fmt::format("{}/{}", h.order, h.pole_pairs), mv(h.amplitude[0]), mv(h.amplitude[1]),
+                                    mv(h.standard_error), h.phase ? fmt::format("{:.2f}", (*h.phase)[1]) : std::string("per segment"),
+                                    fmt::format("{:.2g}", h.p_value), std::to_string(h.segments)});
+            doc.add(std::move(mechanical));
+        }
+    }
     add_image(doc, png.rms, "residual rms per segment");
     add_image(doc, png.time, "residual against time");
     add_image(doc, png.angle, "residual against the electrical angle");

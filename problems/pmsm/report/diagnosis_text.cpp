@@ -32,6 +32,7 @@ std::string diagnosis_text(const Diagnosis& d) {
     }
     t += "\n" + path_text(d) + "\n";
     for (const auto& f : d.findings) t += "- " + f + "\n";
+    if (!d.lack_of_fit.mechanical_angle.empty()) t += "mechanical orders (k/p of the electrical frequency): " + d.lack_of_fit.mechanical_angle + "\n";
     if (!d.detection_limits.empty()) {
         t += "\ndetection limits of this log: the smallest size at which each effect left out would be found (in about half of such logs)\n";
         for (const auto& l : d.detection_limits) {
