@@ -196,3 +196,47 @@ TEST_CASE("device plant, several noise seeds: clear effects found alone, in a pa
     CHECK(record["structure_left"].get<double>() >= 0.0);
     CHECK_THAT(table, Catch::Contains("the same where no structure is left"));
 }
+
+TEST_CASE("an outside case on a profile of its own counts as correct only when its mechanical order is named", "[pmsm][study][hidden]") {
+    testing::TemporaryDirectory dir;
+    const std::string whole_turns = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_whole_turns_profile.toml";
+    const std::string eccentric = "settings = { plant.rotor_flux = { eccentricity = 0.02, eccentricity_phase = 0.6 } }\n";
+    const auto file = dir.write(
+        "s.toml", study_text(profile_path(),
+                             "[[outside]]\nname = \"eccentric\"\nprofile = \"" + whole_turns + "\"\nmechanical_order = 1\n" + eccentric +
+                                 "[[outside]]\nname = \"claimed_twice_per_turn\"\nprofile = \"" + whole_turns + "\"\nmechanical_order = 2\n" + eccentric,
+                             "[5]"));
+    const auto spec = read_study(file);
+    auto cases = study_cases(spec);
+    std::erase_if(cases, [](const StudyCase& c) { return c.kind == "clean"; });
+    REQUIRE(cases.size() == 2);
+    CHECK(cases[0].profile == whole_turns);
+    const auto run = run_study(spec, cases, DiagnosisOptions{});
+    REQUIRE(run.records.size() == 2);
+    for (const auto& r : run.records) {
+        INFO(run.cases[r.case_index].label);
+        CHECK(r.not_in_library);
+        CHECK(r.found.empty());
+        CHECK(r.mechanical_orders == std::vector<int>{1});
+    }
+    CHECK(run.records[0].correct);
+    CHECK_FALSE(run.records[1].correct);  // "not in the library" said, but not at the order the case states
+    CHECK(study_record_json(run, run.records[0])["mechanical_orders"] == nlohmann::ordered_json::array({1}));
+}
+
+TEST_CASE("an outside case's profile and mechanical order are checked", "[pmsm][study]") {
+    testing::TemporaryDirectory dir;
+    auto refused = [&](const std::string& extra, const std::string& expected) {
+        const auto file = dir.write("bad.toml", study_text(profile_path(), extra));
+        try {
+            read_study(file);
+            FAIL("accepted: " << extra);
+        } catch (const InputError& e) {
+            CHECK_THAT(e.what(), Catch::Contains(expected));
+        }
+    };
+    refused("[[outside]]\nname = \"x\"\nsettings = {}\nmechanical_order = 5\n", "outside[0].mechanical_order: expects a whole number in [1, 4]");
+    refused("[[outside]]\nname = \"x\"\nsettings = {}\nmechanical_order = \"once\"\n", "outside[0].mechanical_order");
+    refused("[[outside]]\nname = \"x\"\nsettings = {}\nprofile = \"no_such_profile.toml\"\n", "no_such_profile.toml");
+    refused("[[outside]]\nname = \"x\"\nsettings = {}\norder = 1\n", "outside[0].order: unknown key");
+}

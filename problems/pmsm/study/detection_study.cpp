@@ -15,6 +15,7 @@
 
 #include "framework/input_error.hpp"
 #include "framework/report_document.hpp"
+#include "problems/pmsm/diagnosis/lack_of_fit.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "problems/pmsm/data/text_file.hpp"
 
@@ -255,12 +256,23 @@ StudySpec read_study(const std::filesystem::path& path) {
             throw InputError(file, line_of(*t.get("weak_size")), field + ".weak_size", "there is no near-limit case (no `weak` settings) to state it for");
         spec.effects.push_back(std::move(e));
     });
-    each_table(file, root, "outside", {"name", "settings"}, [&](const std::string& field, const toml::table& t) {
+    each_table(file, root, "outside", {"name", "settings", "profile", "mechanical_order"}, [&](const std::string& field, const toml::table& t) {
         StudyOutside o;
         o.line = line_of(t);
         o.name = string_of(file, required(file, t, "name", field), field + ".name");
         o.settings = toml_text(settings_table(file, t, "settings", field));
         o.settings_as_written = as_written(text, *t.get("settings"));
+        if (const auto* p = t.get("profile")) {
+            o.profile = directory / string_of(file, *p, field + ".profile");
+            o.profile_text = read_text_file(o.profile, "simulation profile");
+        }
+        if (const auto* m = t.get("mechanical_order")) {
+            const auto order = m->value<std::int64_t>();
+            if (!m->is_integer() || !order || *order < 1 || *order > mechanical_orders)
+                throw InputError(file, line_of(*m), field + ".mechanical_order",
+                                 fmt::format("expects a whole number in [1, {}] (the mechanical orders diagnose tests)", mechanical_orders));
+            o.mechanical_order = static_cast<int>(*order);
+        }
         spec.outside.push_back(std::move(o));
     });
     if (const auto* n = root.get("profile_effects")) {
@@ -388,7 +400,9 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
     };
     for (const auto& p : pairs) add_combination(p, "pair");
     for (const auto& t : spec.triples) add_combination(t, "triple");
-    for (const auto& o : spec.outside) cases.push_back({"outside:" + o.name, "outside", "clear", {}, true, combine({{o.name, o.settings}})});
+    for (const auto& o : spec.outside)
+        cases.push_back({"outside:" + o.name, "outside", "clear", {}, true, combine({{o.name, o.settings}}), {}, "", "", o.profile, o.profile_text,
+                         o.mechanical_order});
     if (!spec.profile_effects.empty())
         for (auto& c : cases) {
             std::vector<std::string> truth;
@@ -411,7 +425,7 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
 }
 
 std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_t seed) {
-    toml::table profile = parse_settings(spec.profile_text, spec.profile.string());
+    toml::table profile = c.profile.empty() ? parse_settings(spec.profile_text, spec.profile.string()) : parse_settings(c.profile_text, c.profile.string());
     if (!c.design_settings.empty()) merge(profile, parse_settings(c.design_settings, spec.file.string()), "", {});
     merge(profile, parse_settings(c.settings, spec.file.string()), "", {});
     toml::table noise;
@@ -430,9 +444,10 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
     const std::size_t total = run.cases.size() * spec.seeds.size();
     run.records.resize(total);
     // Every case's profile is checked before any drive runs, so a bad setting stops the study at once.
+    auto profile_of = [&](const StudyCase& c) { return c.profile.empty() ? spec.profile : c.profile; };
     for (const auto& c : run.cases) {
-        const std::string source = fmt::format("{} (case {})", spec.profile.string(), case_name(c));
-        parse_simulation_profile(case_profile(spec, c, spec.seeds.front()), source, spec.profile.parent_path());
+        const std::string source = fmt::format("{} (case {})", profile_of(c).string(), case_name(c));
+        parse_simulation_profile(case_profile(spec, c, spec.seeds.front()), source, profile_of(c).parent_path());
     }
     std::atomic<std::size_t> done{0};
     std::mutex progress_mutex;
@@ -443,8 +458,8 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         StudyRecord r;
         r.case_index = case_index;
         r.seed = spec.seeds[job % spec.seeds.size()];
-        const std::string source = fmt::format("{} (case {}, seed {})", spec.profile.string(), case_name(c), r.seed);
-        const DriveSimulation sim = parse_simulation_profile(case_profile(spec, c, r.seed), source, spec.profile.parent_path());
+        const std::string source = fmt::format("{} (case {}, seed {})", profile_of(c).string(), case_name(c), r.seed);
+        const DriveSimulation sim = parse_simulation_profile(case_profile(spec, c, r.seed), source, profile_of(c).parent_path());
         SimulationResult result = simulate(sim);
         if (!spec.keep_data.empty()) {
             std::string name;
@@ -452,7 +467,10 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             write_simulation(spec.keep_data / fmt::format("{}_seed{}.csv", name, r.seed), sim, result, source);
         }
         result.data.source = source;
-        const Diagnosis d = diagnose(result.data, model, options);
+        // Whoever logs a drive knows its pole pairs: the diagnosis tests the mechanical orders with them.
+        DiagnosisOptions drive_options = options;
+        drive_options.pole_pairs = sim.motor.pole_pairs;
+        const Diagnosis d = diagnose(result.data, model, drive_options);
         r.recommended = d.recommended.text();
         for (const auto& e : d.recommended.effects)
             if (!model.contains(e.name)) r.found.push_back(e.name);
@@ -475,7 +493,10 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             }
             if (below) r.below_limit.push_back(effect);
         }
-        r.correct = r.found == c.truth && (!c.outside || d.not_in_library);
+        for (const auto& h : d.mechanical_left) r.mechanical_orders.push_back(h.order);
+        const bool order_named = c.mechanical_order == 0 ||
+                                 std::find(r.mechanical_orders.begin(), r.mechanical_orders.end(), c.mechanical_order) != r.mechanical_orders.end();
+        r.correct = r.found == c.truth && (!c.outside || (d.not_in_library && order_named));
         // The base parameters of the recommended model against the plant's (at 20 °C).
         const ModelFit* fit = &d.model;
         for (const auto& step : d.path)
@@ -595,7 +616,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     doc.add(Paragraph{spec.description});
     doc.add(Paragraph{fmt::format("Profile `{}`, model diagnosed `{}`, {} noise seeds per case, {} cases, {} drives. A drive counts as correct when the "
                                   "recommended model adds exactly the effects that were simulated (and, for an effect the library lacks, nothing while "
-                                  "saying \"not in the library\"). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
+                                  "saying \"not in the library\" and, when the study file names the mechanical order it leaves, naming that order). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
                                   "true| / true of the recommended model's base parameters. Interval coverage: over the drives whose recommended model is "
                                   "correct, the share in which the 95 % interval of each base parameter (the recommended model polished with intervals) "
                                   "holds the plant's value; at least 90 % is what a 95 % interval owes. \"Where no structure is left\": the same over the drives "
@@ -707,7 +728,9 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     Table settings("the settings of each effect", {"effect", "clear", "near the limit"});
     for (const auto& e : spec.effects)
         settings.add_row({e.label, "`" + e.clear_as_written + "`", e.weak.empty() ? std::string("—") : "`" + e.weak_as_written + "`"});
-    for (const auto& o : spec.outside) settings.add_row({o.name + " (not in the library)", "`" + o.settings_as_written + "`", "—"});
+    for (const auto& o : spec.outside)
+        settings.add_row({o.name + " (not in the library)",
+                          "`" + o.settings_as_written + "`" + (o.profile.empty() ? std::string() : " on `" + o.profile.filename().string() + "`"), "—"});
     doc.add(std::move(settings));
     return markdown(doc);
 }
@@ -770,8 +793,10 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"structure_left", r.structure_left},
             {"rms", r.rms},
             {"rms_recommended", r.rms_recommended},
-            {"noise", r.noise},
-            {"seconds", r.seconds}});
+            {"noise", r.noise}});
+    // Only when some were named, so that the records of drives without a whole turn stay as they were.
+    if (!r.mechanical_orders.empty()) out["mechanical_orders"] = r.mechanical_orders;
+    out["seconds"] = r.seconds;
     return out;
 }
 

@@ -46,6 +46,12 @@ struct StudyOutside {
     std::string settings;        // profile settings, TOML text
     std::string settings_as_written;
     long line = 0;
+    // A profile of its own (resolved; empty: the study's), for an effect whose signature needs another
+    // design: a harmonic at a mechanical order shows only in segments that turn the shaft a whole turn.
+    std::filesystem::path profile;
+    std::string profile_text;
+    // The mechanical order the diagnosis must name for the drive to count as correct (0: none).
+    int mechanical_order = 0;
 };
 
 // Settings for a case that holds all of `effects` (two imperfections of one device, e.g. winding and
@@ -101,6 +107,9 @@ struct StudyCase {
     std::map<std::string, std::map<std::string, double>> sizes;  // per effect present, its stated true sizes
     std::string design;                 // the [[design]] it runs on (empty: the profile as it is)
     std::string design_settings;        // its settings, TOML text, merged into the profile before `settings`
+    std::filesystem::path profile;      // the case's own profile (empty: the study's)
+    std::string profile_text;
+    int mechanical_order = 0;           // must be named for the drive to count as correct (0: none)
 };
 
 std::vector<StudyCase> study_cases(const StudySpec& spec);
@@ -113,11 +122,12 @@ struct StudyRecord {
     std::uint64_t seed = 0;
     std::string recommended;            // the recommended model
     std::vector<std::string> found;     // its effects beyond the model diagnosed (sorted)
-    bool correct = false;               // found == truth (and, with an outside effect, "not in the library" said)
+    bool correct = false;               // found == truth (and, with an outside effect, "not in the library" said and its mechanical order named)
     bool not_in_library = false;
     bool tie = false;
     bool incomplete = false;            // recommended, and "something else is missing" said
     bool intervals_valid = true;        // the diagnosis did not mark the recommended model's intervals not valid
+    std::vector<int> mechanical_orders; // harmonics at mechanical orders the findings named (left beyond chance)
     std::vector<std::string> false_positives, missed;
     std::vector<DetectionLimit> missed_limits;  // the detection limits the diagnosis printed for the missed effects
     // Missed effects whose every stated size is below the limit printed for it: the log could not show them.
