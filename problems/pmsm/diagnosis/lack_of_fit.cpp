@@ -119,22 +119,53 @@ std::vector<Harmonic> angle_harmonics(const Measurement& data, const Eigen::Vect
 
 namespace {
 
-// The columns of one mechanical order in the joint fit: a pair (cos, sin) for the whole log with the
-// logged angle, one per carrying segment with the integrated one.
+// One mechanical order tested: the segments that carry it, and where its cos and sin coefficients
+// sit. With the logged angle they are two global columns; with the integrated one two local columns
+// of each carrying segment.
 struct OrderColumns {
     int order = 0;
-    std::vector<Eigen::Index> first;     // first column of each pair
-    std::vector<std::size_t> segment;    // the segment each pair belongs to (integrated angle)
-    std::vector<std::size_t> carriers;   // segments that carry the order
-    Eigen::Index rows = 0;               // rows of those segments
+    std::vector<std::size_t> carriers;  // segments that carry the order
+    Eigen::Index global = -1;           // first of its two global columns (logged angle)
+    std::vector<Eigen::Index> local;    // first of its two local columns in each carrier (integrated angle)
+    Eigen::Index rows = 0;              // rows of the carriers
 };
 
-// P(chi^2 > c' B^-1 c / variance) for coefficients c with covariance B per unit noise variance; 1
-// when B is not positive definite (the columns are not determined).
-double wald_p_value(const Eigen::MatrixXd& covariance, const Eigen::VectorXd& c, double variance) {
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) return 1.0;
-    return chi_squared_survival(c.dot(ldlt.solve(c)) / variance, static_cast<double>(c.size()));
+// The joint fit's normal equations in blocks: per segment its local columns (its mean, and with the
+// integrated angle the pairs of the orders it carries), and the global columns every row has (the
+// electrical harmonics, and with the logged angle the mechanical pairs).
+struct SegmentEquations {
+    Eigen::MatrixXd local, cross, moment;  // local x local, local x global, local x 2 axes
+};
+struct JointEquations {
+    std::vector<SegmentEquations> segments;
+    Eigen::MatrixXd global, moment;  // global x global, global x 2 axes
+};
+
+// P(chi^2 > c' V^-1 c / variance) for coefficients c whose covariance per unit noise variance is V =
+// D + U S^-1 U' (D block diagonal with 2 x 2 blocks, S the global columns' Schur complement), by
+// Woodbury's identity, V^-1 = D^-1 - D^-1 U (S + U' D^-1 U)^-1 U' D^-1, so that a pair per segment
+// over many segments costs no dense matrix of their number; 1 when V is not positive definite (the
+// columns are not determined).
+double wald_p_value(const std::vector<Eigen::Matrix2d>& d, const Eigen::MatrixXd& u, const Eigen::MatrixXd& schur, const Eigen::VectorXd& c,
+                    double variance) {
+    Eigen::VectorXd d_inverse_c(c.size());
+    Eigen::MatrixXd d_inverse_u(u.rows(), u.cols());
+    for (std::size_t k = 0; k < d.size(); ++k) {
+        const Eigen::LDLT<Eigen::Matrix2d> ldlt(d[k]);
+        if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) return 1.0;
+        const auto i = 2 * static_cast<Eigen::Index>(k);
+        d_inverse_c.segment<2>(i) = ldlt.solve(c.segment<2>(i));
+        if (u.cols() > 0) d_inverse_u.middleRows<2>(i) = ldlt.solve(u.middleRows<2>(i));
+    }
+    double statistic = c.dot(d_inverse_c);
+    if (u.cols() > 0) {
+        const Eigen::MatrixXd inner = schur + u.transpose() * d_inverse_u;
+        const Eigen::LDLT<Eigen::MatrixXd> ldlt(inner);
+        if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) return 1.0;
+        const Eigen::VectorXd projected = u.transpose() * d_inverse_c;
+        statistic -= projected.dot(ldlt.solve(projected));
+    }
+    return chi_squared_survival(statistic / variance, static_cast<double>(c.size()));
 }
 
 }  // namespace
@@ -147,7 +178,6 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
     }
     const Eigen::Index n = data.size();
     const auto ranges = segment_ranges(data);
-    const auto s = static_cast<Eigen::Index>(ranges.size());
     const Eigen::VectorXd& angle = shaft.angle;
     // How far the shaft turns in each segment (steps of less than half a turn a row), and which way.
     std::vector<double> travel, direction;
@@ -158,7 +188,8 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
         direction.push_back(sum < 0.0 ? -1.0 : 1.0);
     }
     const Eigen::Index electrical = data.theta_e ? 2 * orders : 0;
-    Eigen::Index column = s + electrical;
+    Eigen::Index globals = electrical;
+    std::vector<Eigen::Index> locals(ranges.size(), 1);  // each segment's mean first
     std::vector<OrderColumns> tested;
     std::vector<int> coinciding;
     for (int k = 1; k <= mechanical_orders; ++k) {
@@ -174,9 +205,14 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
                 o.rows += ranges[g].rows;
             }
         if (o.carriers.empty()) continue;
-        for (std::size_t pair = 0; pair < (shaft.logged ? 1 : o.carriers.size()); ++pair, column += 2) {
-            o.first.push_back(column);
-            o.segment.push_back(o.carriers[pair]);
+        if (shaft.logged) {
+            o.global = globals;
+            globals += 2;
+        } else {
+            for (const auto g : o.carriers) {
+                o.local.push_back(locals[g]);
+                locals[g] += 2;
+            }
         }
         tested.push_back(std::move(o));
     }
@@ -190,17 +226,17 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
                                      longest, shaft.source);
         return out;
     }
-    // The mechanical columns each segment's rows carry: (order, first column).
+    // The orders each segment's rows carry: (order, its first column: global or local).
     std::vector<std::vector<std::pair<int, Eigen::Index>>> active(ranges.size());
     for (const auto& o : tested)
         for (std::size_t c = 0; c < o.carriers.size(); ++c)
-            active[o.carriers[c]].emplace_back(o.order, o.first[shaft.logged ? 0 : c]);
+            active[o.carriers[c]].emplace_back(o.order, shaft.logged ? o.global : o.local[c]);
 
-    // Normal equations of the joint fit, a block of rows at a time; the harmonic columns (electrical
-    // and mechanical) are stored after the segment indicators, and each row adds only its nonzero ones.
-    const Eigen::Index columns = column, harmonic_columns = columns - s;
+    // A block of rows at a time, in parallel; each block's share of the segments it touches, added in
+    // block order, so the sums do not depend on the thread count.
     struct Share {
-        Eigen::MatrixXd gram, segment_cross, moment;
+        JointEquations equations;
+        std::size_t first_segment = 0;
     };
     constexpr Eigen::Index block_rows = 4096;
     const Eigen::Index blocks = (n + block_rows - 1) / block_rows;
@@ -209,50 +245,77 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
     for (std::size_t g = 0; g < ranges.size(); ++g)
         std::fill_n(segment_of_row.begin() + ranges[g].first, ranges[g].rows, g);
     tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index b) {
+        const Eigen::Index begin = b * block_rows, end = std::min(n, (b + 1) * block_rows);
         Share& share = shares[static_cast<std::size_t>(b)];
-        share.gram = Eigen::MatrixXd::Zero(harmonic_columns, harmonic_columns);
-        share.segment_cross = Eigen::MatrixXd::Zero(s, harmonic_columns);
-        share.moment = Eigen::MatrixXd::Zero(harmonic_columns, 2);
-        std::vector<double> x;
-        std::vector<Eigen::Index> at;
-        for (Eigen::Index t = b * block_rows; t < std::min(n, (b + 1) * block_rows); ++t) {
+        share.first_segment = segment_of_row[static_cast<std::size_t>(begin)];
+        auto& e = share.equations;
+        e.global = Eigen::MatrixXd::Zero(globals, globals);
+        e.moment = Eigen::MatrixXd::Zero(globals, 2);
+        for (std::size_t g = share.first_segment; g <= segment_of_row[static_cast<std::size_t>(end - 1)]; ++g)
+            e.segments.push_back({Eigen::MatrixXd::Zero(locals[g], locals[g]), Eigen::MatrixXd::Zero(locals[g], globals),
+                                  Eigen::MatrixXd::Zero(locals[g], 2)});
+        Eigen::VectorXd x_global(globals), x_local;
+        for (Eigen::Index t = begin; t < end; ++t) {
             const std::size_t g = segment_of_row[static_cast<std::size_t>(t)];
-            x.assign(static_cast<std::size_t>(electrical), 0.0);
-            at.resize(static_cast<std::size_t>(electrical));
-            if (electrical > 0) write_angle_harmonics((*data.theta_e)[t], x.data());
-            for (Eigen::Index c = 0; c < electrical; ++c) at[static_cast<std::size_t>(c)] = c;
+            SegmentEquations& own = e.segments[g - share.first_segment];
+            x_global.setZero();
+            x_local.setZero(locals[g]);
+            x_local[0] = 1.0;
+            if (electrical > 0) write_angle_harmonics((*data.theta_e)[t], x_global.data());
             // With the logged angle one pair serves both directions, turned with the direction: what the
             // voltage shows of something turning with the shaft is an EMF or an angle error, both
             // proportional to the speed, so it changes sign with it and would cancel otherwise.
             const double sign = shaft.logged ? direction[g] : 1.0;
             for (const auto& [order, first] : active[g]) {
-                x.push_back(sign * std::cos(order * angle[t]));
-                x.push_back(sign * std::sin(order * angle[t]));
-                at.push_back(first - s);
-                at.push_back(first - s + 1);
+                Eigen::VectorXd& x = shaft.logged ? x_global : x_local;
+                x[first] = sign * std::cos(order * angle[t]);
+                x[first + 1] = sign * std::sin(order * angle[t]);
             }
-            for (std::size_t i = 0; i < x.size(); ++i) {
-                for (std::size_t j = 0; j < x.size(); ++j) share.gram(at[i], at[j]) += x[i] * x[j];
-                share.segment_cross(static_cast<Eigen::Index>(g), at[i]) += x[i];
-                share.moment(at[i], 0) += residual[t] * x[i];
-                share.moment(at[i], 1) += residual[n + t] * x[i];
-            }
+            const Eigen::Vector2d r(residual[t], residual[n + t]);
+            e.global.selfadjointView<Eigen::Lower>().rankUpdate(x_global);
+            e.moment.noalias() += x_global * r.transpose();
+            own.local.selfadjointView<Eigen::Lower>().rankUpdate(x_local);
+            own.cross.noalias() += x_local * x_global.transpose();
+            own.moment.noalias() += x_local * r.transpose();
         }
     });
-    Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(columns, columns), moment = Eigen::MatrixXd::Zero(columns, 2);
-    for (Eigen::Index k = 0; k < s; ++k) {
-        const auto& r = ranges[static_cast<std::size_t>(k)];
-        gram(k, k) = static_cast<double>(r.rows);
-        for (int a = 0; a < 2; ++a) moment(k, a) = residual.segment(a * n + r.first, r.rows).sum();
-    }
+    JointEquations joint;
+    joint.global = Eigen::MatrixXd::Zero(globals, globals);
+    joint.moment = Eigen::MatrixXd::Zero(globals, 2);
+    for (std::size_t g = 0; g < ranges.size(); ++g)
+        joint.segments.push_back({Eigen::MatrixXd::Zero(locals[g], locals[g]), Eigen::MatrixXd::Zero(locals[g], globals),
+                                  Eigen::MatrixXd::Zero(locals[g], 2)});
     for (const auto& share : shares) {
-        gram.bottomRightCorner(harmonic_columns, harmonic_columns) += share.gram;
-        gram.topRightCorner(s, harmonic_columns) += share.segment_cross;
-        moment.bottomRows(harmonic_columns) += share.moment;
+        joint.global += share.equations.global;
+        joint.moment += share.equations.moment;
+        for (std::size_t k = 0; k < share.equations.segments.size(); ++k) {
+            auto& to = joint.segments[share.first_segment + k];
+            const auto& from = share.equations.segments[k];
+            to.local += from.local;
+            to.cross += from.cross;
+            to.moment += from.moment;
+        }
     }
-    gram.bottomLeftCorner(harmonic_columns, s) = gram.topRightCorner(s, harmonic_columns).transpose();
-    const Eigen::MatrixXd inverse = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(gram).pseudoInverse();
-    const Eigen::MatrixXd coefficients = inverse * moment;
+    joint.global = Eigen::MatrixXd(joint.global.selfadjointView<Eigen::Lower>());
+
+    // Eliminate each segment's local columns: U = A^-1 B and w = A^-1 m per segment, the global
+    // columns' Schur complement S = C - sum B' U, their coefficients, then the locals' (each with
+    // covariance A^-1 + U S^-1 U' per unit noise variance).
+    std::vector<Eigen::MatrixXd> local_inverse(ranges.size()), eliminated(ranges.size()), local_coefficients(ranges.size());
+    Eigen::MatrixXd schur = joint.global, reduced = joint.moment;
+    for (std::size_t g = 0; g < ranges.size(); ++g) {
+        const auto& seg = joint.segments[g];
+        local_inverse[g] = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(Eigen::MatrixXd(seg.local.selfadjointView<Eigen::Lower>()))
+                               .pseudoInverse();
+        eliminated[g] = local_inverse[g] * seg.cross;
+        schur -= seg.cross.transpose() * eliminated[g];
+        reduced -= seg.cross.transpose() * (local_inverse[g] * seg.moment);
+    }
+    const Eigen::MatrixXd global_covariance =
+        globals > 0 ? Eigen::MatrixXd(Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(schur).pseudoInverse()) : Eigen::MatrixXd();
+    const Eigen::MatrixXd global_coefficients = global_covariance * reduced;
+    for (std::size_t g = 0; g < ranges.size(); ++g)
+        local_coefficients[g] = local_inverse[g] * (joint.segments[g].moment - joint.segments[g].cross * global_coefficients);
 
     const double mean_long_run = 0.5 * (noise.long_run[0] + noise.long_run[1]);
     std::vector<std::string> names;
@@ -262,19 +325,34 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
         h.pole_pairs = shaft.pole_pairs;
         h.segments = static_cast<int>(o.carriers.size());
         h.rows = o.rows;
-        std::vector<Eigen::Index> cols;
-        for (const auto first : o.first) cols.insert(cols.end(), {first, first + 1});
-        const auto m = static_cast<Eigen::Index>(cols.size());
-        Eigen::MatrixXd covariance(m, m);
-        for (Eigen::Index i = 0; i < m; ++i)
-            for (Eigen::Index j = 0; j < m; ++j) covariance(i, j) = inverse(cols[static_cast<std::size_t>(i)], cols[static_cast<std::size_t>(j)]);
+        // The order's coefficients (per axis), the 2 x 2 blocks of their covariance per unit noise
+        // variance that are their own (D), and how they share the global columns' (U).
+        const std::size_t pairs = shaft.logged ? 1 : o.carriers.size();
+        std::vector<Eigen::Matrix2d> own(pairs);
+        Eigen::MatrixXd shared(2 * static_cast<Eigen::Index>(pairs), shaft.logged ? 0 : globals);
+        Eigen::MatrixXd c(2 * static_cast<Eigen::Index>(pairs), 2);
+        std::vector<Eigen::Matrix2d> covariance(pairs);  // of each pair alone
+        for (std::size_t k = 0; k < pairs; ++k) {
+            const auto i = 2 * static_cast<Eigen::Index>(k);
+            if (shaft.logged) {
+                own[k] = global_covariance.block<2, 2>(o.global, o.global);
+                c.middleRows<2>(i) = global_coefficients.middleRows<2>(o.global);
+                covariance[k] = own[k];
+            } else {
+                const std::size_t g = o.carriers[k];
+                const Eigen::Index at = o.local[k];
+                own[k] = local_inverse[g].block<2, 2>(at, at);
+                shared.middleRows<2>(i) = eliminated[g].middleRows<2>(at);
+                c.middleRows<2>(i) = local_coefficients[g].middleRows<2>(at);
+                covariance[k] = own[k] + shared.middleRows<2>(i) * global_covariance * shared.middleRows<2>(i).transpose();
+            }
+        }
         // Variance of one amplitude component per unit noise variance: the pair's, or with a pair per
         // segment the mean of theirs weighted by the segments' rows.
         double component_variance = 0.0, weights = 0.0;
-        for (std::size_t pair = 0; pair < o.first.size(); ++pair) {
-            const auto i = 2 * static_cast<Eigen::Index>(pair);
-            const double weight = static_cast<double>(ranges[o.segment[pair]].rows);
-            component_variance += weight * 0.5 * covariance.block(i, i, 2, 2).trace();
+        for (std::size_t k = 0; k < pairs; ++k) {
+            const double weight = shaft.logged ? 1.0 : static_cast<double>(ranges[o.carriers[k]].rows);
+            component_variance += weight * 0.5 * covariance[k].trace();
             weights += weight;
         }
         component_variance /= weights;
@@ -282,27 +360,24 @@ MechanicalTest mechanical_harmonics(const Measurement& data, const Eigen::Vector
         double p_min = 1.0;
         Eigen::Vector2d phase{0.0, 0.0};
         for (int a = 0; a < 2; ++a) {
-            Eigen::VectorXd c(m);
-            for (Eigen::Index i = 0; i < m; ++i) c[i] = coefficients(cols[static_cast<std::size_t>(i)], a);
+            const Eigen::VectorXd ca = c.col(a);
             const double variance = noise.long_run[a] * noise.long_run[a];
-            p_min = std::min(p_min, wald_p_value(covariance, c, variance));
+            p_min = std::min(p_min, wald_p_value(own, shared, schur, ca, variance));
             const double component_error = std::sqrt(component_variance * variance);
             if (shaft.logged) {
                 // a cos(k theta) + b sin(k theta) = A cos(k theta + phase): A cos(phase) = a, A sin(phase) = -b.
-                h.amplitude[a] = std::hypot(c[0], c[1]);
-                phase[a] = std::atan2(-c[1], c[0]);
+                h.amplitude[a] = std::hypot(ca[0], ca[1]);
+                phase[a] = std::atan2(-ca[1], ca[0]);
                 h.amplitude_standard_error[a] = component_error;
             } else {
                 // Each segment's squared amplitude holds the noise's two components' variance besides the
                 // harmonic's; the mean over m segments has m times less of the amplitude's error.
                 double power = 0.0;
-                for (std::size_t pair = 0; pair < o.first.size(); ++pair) {
-                    const auto i = 2 * static_cast<Eigen::Index>(pair);
-                    const double noise_power = covariance.block(i, i, 2, 2).trace() * variance;
-                    power += static_cast<double>(ranges[o.segment[pair]].rows) * (c.segment(i, 2).squaredNorm() - noise_power);
-                }
+                for (std::size_t k = 0; k < pairs; ++k)
+                    power += static_cast<double>(ranges[o.carriers[k]].rows) *
+                             (ca.segment<2>(2 * static_cast<Eigen::Index>(k)).squaredNorm() - covariance[k].trace() * variance);
                 h.amplitude[a] = std::sqrt(std::max(0.0, power / static_cast<double>(o.rows)));
-                h.amplitude_standard_error[a] = component_error / std::sqrt(static_cast<double>(o.first.size()));
+                h.amplitude_standard_error[a] = component_error / std::sqrt(static_cast<double>(pairs));
             }
             h.phase_standard_error[a] = h.amplitude[a] > 0.0 ? h.amplitude_standard_error[a] / h.amplitude[a] : std::numbers::pi;
         }
