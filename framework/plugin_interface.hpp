@@ -12,7 +12,8 @@
 //    implausible_reason; plant_flux_model takes the plant's scale; the saturation law changed.
 // 5: Effect gained is_size (a virtual: the parameters a detection limit is stated in).
 // 6: Measurement gained theta_m (the shaft's mechanical angle, an optional column: its layout changed).
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 6
+// 7: Effect gained law_accuracy (a virtual: the error its law is known to leave on real machines).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 7
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

@@ -240,3 +240,26 @@ TEST_CASE("an outside case's profile and mechanical order are checked", "[pmsm][
     refused("[[outside]]\nname = \"x\"\nsettings = {}\nprofile = \"no_such_profile.toml\"\n", "no_such_profile.toml");
     refused("[[outside]]\nname = \"x\"\nsettings = {}\norder = 1\n", "outside[0].order: unknown key");
 }
+
+TEST_CASE("a study on a saturating plant records how far the recommended flux model lies from the plant's", "[pmsm][study]") {
+    // One drive of the Baldor study (the measured map as the plant) and one clean drive of a linear plant.
+    auto baldor = read_study(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "baldor_study.toml");
+    baldor.only = "low_small_quiet/clean";
+    baldor.seeds = {1};
+    const StudyRun saturated = run_study(baldor, study_cases(baldor), DiagnosisOptions{});
+    REQUIRE(saturated.records.size() == 1);
+    const StudyRecord& r = saturated.records.front();
+    CHECK(r.recommended == "base+saturation");
+    // The issue's bound for the fitted law against the measured map over the logged currents: 3 %.
+    REQUIRE(std::isfinite(r.flux_error));
+    CHECK(r.flux_error > 0.0);
+    CHECK(r.flux_error < 0.03);
+    CHECK(study_record_json(saturated, r).contains("flux_error"));
+
+    testing::TemporaryDirectory dir;
+    auto linear = read_study(dir.write("s.toml", study_text(profile_path(), "", "[1]")));
+    const StudyRun clean = run_study(linear, study_cases(linear), DiagnosisOptions{});
+    REQUIRE(clean.records.size() == 1);
+    CHECK(std::isnan(clean.records.front().flux_error));
+    CHECK_FALSE(study_record_json(clean, clean.records.front()).contains("flux_error"));
+}

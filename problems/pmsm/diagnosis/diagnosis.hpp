@@ -99,6 +99,12 @@ enum class StepKind { Start, Added, Pruned };
 
 // One step of the search over sets of effects: the model after adding `effect` to the previous step,
 // or pruning it.
+// The structure a set's effect laws may leave by their stated accuracy (Effect::law_accuracy).
+struct LawAllowance {
+    double power = 0.0;   // relative to the noise power, as LackOfFit::structure
+    std::string source;   // "saturation (2 % of the flux linkage)", empty when none
+};
+
 struct PathStep {
     ModelFit fit;
     StepKind kind = StepKind::Start;      // Start: the model diagnosed
@@ -107,8 +113,9 @@ struct PathStep {
     double explained = 0.0;               // fraction of the first step's excess residual removed so far
     bool plausible = true;                // the whole set's values (base and effects)
     std::vector<std::string> implausible;
-    bool at_noise_floor = false;          // no lack of fit left, or less than the tolerance (DiagnosisOptions)
+    bool at_noise_floor = false;          // no lack of fit left, or less than the tolerance (DiagnosisOptions) and the laws' allowance
     double structure = 0.0;               // power of the significant structure left, relative to the noise's
+    LawAllowance allowance;               // the structure the set's laws may leave by their stated accuracy
     std::string signature;                // of that structure, in words (empty when none is significant)
 
     // The change as the JSON and the text write it: "+effect", "-effect", empty for the start.

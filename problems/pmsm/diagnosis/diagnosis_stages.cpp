@@ -155,7 +155,8 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
         step.explained = explained_fraction(model, step.fit, floor_rss);
         if (k > 0) trace.left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, storage), noise, shaft));
         const LackOfFit& left = trace.left[k];
-        step.at_noise_floor = !left.significant || left.structure < floor_tolerance;
+        step.allowance = law_allowance(data, step.fit, noise);
+        step.at_noise_floor = at_noise_floor(left, floor_tolerance, step.allowance);
         step.structure = left.significant ? left.structure : 0.0;
         if (left.significant) step.signature = left.signature;
         trace.path.push_back(std::move(step));

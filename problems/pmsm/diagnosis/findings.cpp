@@ -112,6 +112,11 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
                                 "are not valid (they take that structure for noise), and its values hold only as far as the structure does not bias them.",
                                 last.fit.spec.text(), 100.0 * last.explained, floor,
                                 last.signature.empty() ? std::string("structure beyond the noise") : last.signature));
+    else if (!last.signature.empty() && last.structure >= floor_tolerance)
+        f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: more than the tolerance of {:.2f}, within what "
+                                "the stated accuracy of the law of {} allows on this log ({:.2f}). It is that law's own error; a larger one "
+                                "would mean another effect.",
+                                last.signature, last.structure, floor_tolerance, last.allowance.source, floor_tolerance + last.allowance.power));
     else if (!last.signature.empty())
         f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
                                 "the steady-state model's own error on effects that make the currents ripple; a larger one would mean "

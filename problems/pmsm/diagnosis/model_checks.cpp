@@ -62,6 +62,28 @@ void check_base(const ModelFit& fit, std::vector<std::string>& problems) {
     }
 }
 
+LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise) {
+    LawAllowance out;
+    if (fit.spec.effects.empty()) return out;
+    double accuracy = 0.0;
+    const auto model = make_model(fit.spec, data);
+    for (const auto& effect : model->effects())
+        if (effect->law_accuracy() > accuracy) {
+            accuracy = effect->law_accuracy();
+            out.source = fmt::format("{} ({:g} % of the flux linkage)", effect->name(), 100.0 * accuracy);
+        }
+    const double noise_power = static_cast<double>(data.size()) * noise.sigma.squaredNorm();
+    if (!(accuracy > 0.0) || !(noise_power > 0.0)) return out;
+    // omega psi = u - Rs i in the steady state, whatever else the model holds.
+    const double rs = fit.values[0];
+    out.power = accuracy * accuracy * ((data.u_d - rs * data.i_d).squaredNorm() + (data.u_q - rs * data.i_q).squaredNorm()) / noise_power;
+    return out;
+}
+
+bool at_noise_floor(const LackOfFit& left, double floor_tolerance, const LawAllowance& allowance) {
+    return !left.significant || left.structure < floor_tolerance + allowance.power;
+}
+
 void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std::string>& problems) {
     if (fit.spec.effects.empty()) return;
     // The model's effects know the data's scale, and with it their ranges and what their ends mean.

@@ -33,6 +33,15 @@ HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& cand
 // majority of them (true without leave-one-out, `model_folds` empty).
 bool predicts_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);
 
+// The structure a fit's effect laws may leave by their stated accuracy (Effect::law_accuracy): the
+// largest accuracy among them, squared, times the power of the voltage the flux linkage makes
+// (u - Rs i, every row), relative to the noise power. Zero when no law states an error.
+LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise);
+
+// Whether what `left` measures is at the noise floor: nothing significant, or less than the
+// tolerance (DiagnosisOptions::floor_tolerance) and the laws' allowance.
+bool at_noise_floor(const LackOfFit& left, double floor_tolerance, const LawAllowance& allowance);
+
 // Appends to `problems` each base parameter that is not positive or outside Table 2's box.
 void check_base(const ModelFit& fit, std::vector<std::string>& problems);
 

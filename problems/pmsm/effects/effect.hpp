@@ -157,6 +157,10 @@ public:
     // a diagnosis states the smallest size each effect could have and still show in a log
     // (diagnosis/detection_limits.hpp). The linear parameters unless the effect says otherwise.
     virtual bool is_size(std::size_t k) const { return model_linear_in(k); }
+    // How closely the effect's law follows real machines: the rms error it is known to leave, as a
+    // fraction of the flux linkage (0: exact, as an offset or a delay is). Residual structure within
+    // it is the law's own error, not a missing effect (docs/diagnosis.md, "The laws' accuracy").
+    virtual double law_accuracy() const { return 0.0; }
 
     // ---- what the data allow ----
     // Narrows the plausible range [lo, hi] of real parameter k to what data of this scale() can tell

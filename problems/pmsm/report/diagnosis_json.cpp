@@ -60,7 +60,7 @@ json diagnosis_json(const Diagnosis& d) {
     out["intervals_valid"] = d.model_intervals_valid();
     out["recommended_intervals_valid"] = d.recommended_intervals_valid();
     json path = json::array();
-    for (const auto& step : d.path)
+    for (const auto& step : d.path) {
         path.push_back({{"model", step.fit.spec.text()},
                         {"added", step.change().empty() ? json(nullptr) : json(step.change())},
                         {"rms", step.fit.rms.total},
@@ -70,6 +70,9 @@ json diagnosis_json(const Diagnosis& d) {
                         {"plausible", step.plausible},
                         {"implausible", step.implausible},
                         {"at_noise_floor", step.at_noise_floor}});
+        // Only where a law states an error: the structure it may leave, relative to the noise power.
+        if (!step.allowance.source.empty()) path.back()["law_allowance"] = {{"law", step.allowance.source}, {"power", step.allowance.power}};
+    }
     out["path"] = path;
     out["pruned"] = d.pruned;
     out["findings"] = d.findings;

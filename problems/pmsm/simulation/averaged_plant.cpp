@@ -114,7 +114,7 @@ private:
 class AveragedPlant final : public ControlledPlant {
 public:
     explicit AveragedPlant(const DriveSimulation& spec)
-        : spec_(spec), plant_(spec, linear_or_effect_flux(spec)),
+        : spec_(spec), plant_(spec, plant_flux_model(spec)),
           steps_per_control_(whole_ratio(spec.control.control_period, spec.control.integration_step,
                                          "control_period / integration_step")),
           h_(spec.control.control_period / static_cast<double>(steps_per_control_)) {
@@ -174,14 +174,6 @@ public:
     std::int64_t integration_steps() const override { return step_index_; }
 
 private:
-    static std::unique_ptr<FluxModel> linear_or_effect_flux(const DriveSimulation& spec) {
-        std::unique_ptr<FluxModel> flux = std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
-        for (const auto& e : spec.effects)
-            if (auto replacement = e->plant_flux_model(spec.motor, {spec.control.current_limit, spec.motor.psi_f}, spec.base_directory))
-                flux = std::move(replacement);
-        return flux;
-    }
-
     const DriveSimulation& spec_;
     Plant plant_;
     std::int64_t steps_per_control_;

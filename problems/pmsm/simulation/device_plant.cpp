@@ -28,10 +28,7 @@ public:
           carriers_per_control_(std::llround(spec.control.control_period * device_.inverter.pwm_frequency)),
           carrier_period_(spec.control.control_period / static_cast<double>(carriers_per_control_)),
           thermal_(device_.thermal, spec.control.control_period) {
-        if (device_.saturation.saturation_current > 0)
-            flux_ = std::make_unique<SaturatingIron>(spec.motor.ld, spec.motor.lq, device_.saturation.saturation_current);
-        else
-            flux_ = std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
+        flux_ = plant_flux_model(spec);
         for (const auto& h : device_.rotor_flux.harmonics) {
             std::array<Complex, 3> turns;
             for (std::size_t x = 0; x < 3; ++x) turns[x] = std::polar(1.0, -2.0 * std::numbers::pi * h.order * static_cast<double>(x) / 3.0);

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "problems/pmsm/machine/flux_models.hpp"
+
 namespace mhb::pmsm {
 
 double TemperatureProfile::at(double t) const {
@@ -39,6 +41,19 @@ DriveSimulation with_device(const DriveSimulation& base, const DeviceSettings& d
     d.base_directory = base.base_directory;
     d.device = device;
     return d;
+}
+
+std::unique_ptr<FluxModel> plant_flux_model(const DriveSimulation& spec) {
+    if (spec.device) {
+        if (spec.device->saturation.saturation_current > 0)
+            return std::make_unique<SaturatingIron>(spec.motor.ld, spec.motor.lq, spec.device->saturation.saturation_current);
+        return std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
+    }
+    std::unique_ptr<FluxModel> flux = std::make_unique<LinearFlux>(spec.motor.ld, spec.motor.lq);
+    for (const auto& e : spec.effects)
+        if (auto replacement = e->plant_flux_model(spec.motor, {spec.control.current_limit, spec.motor.psi_f}, spec.base_directory))
+            flux = std::move(replacement);
+    return flux;
 }
 
 }  // namespace mhb::pmsm

@@ -102,6 +102,11 @@ struct SimulationResult {
 // plant has its own).
 DriveSimulation with_device(const DriveSimulation& base, const DeviceSettings& device, std::uint64_t seed);
 
+// The flux linkage of the machine `spec` simulates: on the device plant its iron (linear, or saturating
+// with stored energy); on the averaged plant the linear machine unless an effect replaces it (a
+// saturation law, a measured map), at the plant's scale (its current limit and magnet flux).
+std::unique_ptr<FluxModel> plant_flux_model(const DriveSimulation& spec);
+
 // A positive integer ratio a / b (steps per control period, control periods per logged sample), or
 // std::invalid_argument naming the two settings.
 std::int64_t whole_ratio(double a, double b, const char* what);

@@ -16,6 +16,8 @@
 #include "framework/input_error.hpp"
 #include "framework/report_document.hpp"
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
+#include "problems/pmsm/machine/flux_models.hpp"
+#include "problems/pmsm/model/steady_state_model.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "problems/pmsm/data/text_file.hpp"
 
@@ -436,6 +438,28 @@ std::string case_profile(const StudySpec& spec, const StudyCase& c, std::uint64_
     return toml_text(profile);
 }
 
+namespace {
+
+// How far the recommended model's flux linkage lies from the plant's at the logged currents: the rms
+// of |psi_model - psi_plant| over the rows, relative to the rms of |psi_plant|. NaN when the plant's
+// flux is linear (the base model's own law: nothing to compare beyond Ld, Lq and psi_f).
+double flux_error_of(const DriveSimulation& sim, const Measurement& data, const ModelFit& fit) {
+    const auto plant = plant_flux_model(sim);
+    if (dynamic_cast<const LinearFlux*>(plant.get())) return std::nan("");
+    const auto model = make_model(fit.spec, data);
+    ModelState s = model->make_state();
+    model->predict(fit.values.data(), s);
+    double error = 0.0, size = 0.0;
+    for (Eigen::Index j = 0; j < data.size(); ++j) {
+        const Complex truth = plant->flux({data.i_d[j], data.i_q[j]}, sim.motor.psi_f);
+        error += std::norm(Complex{s.psi_d[j], s.psi_q[j]} - truth);
+        size += std::norm(truth);
+    }
+    return std::sqrt(error / size);
+}
+
+}  // namespace
+
 StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const DiagnosisOptions& options,
                    const std::function<void(std::size_t, std::size_t)>& progress) {
     StudyRun run;
@@ -515,6 +539,7 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         for (int j = 0; j < 4; ++j)
             if (std::isfinite(interval_fit.lower[j]) && std::isfinite(interval_fit.upper[j]))
                 r.covered[static_cast<std::size_t>(j)] = interval_fit.lower[j] <= truth[j] && truth[j] <= interval_fit.upper[j] ? 1 : 0;
+        r.flux_error = flux_error_of(sim, result.data, *fit);
         r.rms = d.model.rms.total;
         r.rms_recommended = fit->rms.total;
         r.noise = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
@@ -544,6 +569,7 @@ struct CaseSummary {
     std::size_t right_for_log = 0;  // correct, or every effect missed below the limit printed for it
     double false_positives = 0.0;
     Eigen::Vector4d median_error = Eigen::Vector4d::Zero();  // of |relative error|, over runs
+    double median_flux_error = std::nan("");                  // over the runs that have one (StudyRecord::flux_error)
     double seconds = 0.0;
     // Over the drives whose recommended model is correct: intervals of Rs, Ld, Lq, psi_f holding the
     // true value, and intervals there were.
@@ -572,8 +598,10 @@ double median(std::vector<double> v) {
 std::vector<CaseSummary> summaries(const StudyRun& run) {
     std::vector<CaseSummary> out(run.cases.size());
     std::vector<std::array<std::vector<double>, 4>> errors(run.cases.size());
+    std::vector<std::vector<double>> flux_errors(run.cases.size());
     for (const auto& r : run.records) {
         auto& s = out[r.case_index];
+        if (std::isfinite(r.flux_error)) flux_errors[r.case_index].push_back(r.flux_error);
         ++s.runs;
         s.correct += r.correct ? 1 : 0;
         s.right_for_log += r.right_for_this_log() ? 1 : 0;
@@ -597,6 +625,7 @@ std::vector<CaseSummary> summaries(const StudyRun& run) {
     for (std::size_t c = 0; c < out.size(); ++c) {
         if (out[c].runs > 0) out[c].false_positives /= static_cast<double>(out[c].runs);
         for (int j = 0; j < 4; ++j) out[c].median_error[j] = median(errors[c][static_cast<std::size_t>(j)]);
+        out[c].median_flux_error = median(flux_errors[c]);
     }
     return out;
 }
@@ -677,9 +706,13 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     }
     doc.add(std::move(summary));
     doc.add(Heading{2, "Per case"});
-    Table per_case("detection per case", with_design({"case", "kind", "magnitude", "correct", "missed below the printed limit", "false positives per drive", "missed", "not in library", "ties",
+    // Only a study whose plants saturate has a flux error to show.
+    const bool flux = std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return std::isfinite(r.flux_error); });
+    std::vector<Column> per_case_columns = with_design({"case", "kind", "magnitude", "correct", "missed below the printed limit", "false positives per drive", "missed", "not in library", "ties",
                                           Column("median error Rs, Ld, Lq, psi_f", "%"), "intervals holding the truth when correct",
-                                          "most common wrong answer"}));
+                                          "most common wrong answer"});
+    if (flux) per_case_columns.insert(per_case_columns.end() - 1, Column("median flux error against the plant's", "%"));
+    Table per_case("detection per case", std::move(per_case_columns));
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
         std::map<std::string, int> wrong;
         for (const auto& r : run.records)
@@ -692,12 +725,14 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                 common = fmt::format("`{}` ({}x)", answer, count);
             }
         const auto& x = s[c];
-        per_case.add_row(design_cell({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs),
+        std::vector<Cell> row = design_cell({run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude.empty() ? "—" : run.cases[c].magnitude, rate(x.correct, x.runs),
                           std::to_string(x.right_for_log - x.correct), fmt::format("{:.2f}", x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library),
                           std::to_string(x.ties),
                           fmt::format("{:.2f}, {:.2f}, {:.2f}, {:.2f}", 100 * x.median_error[0], 100 * x.median_error[1], 100 * x.median_error[2],
                                       100 * x.median_error[3]),
-                          coverage_text(x.covered, x.intervals), common}, run.cases[c].design));
+                          coverage_text(x.covered, x.intervals), common}, run.cases[c].design);
+        if (flux) row.insert(row.end() - 1, Cell(std::isfinite(x.median_flux_error) ? fmt::format("{:.2f}", 100 * x.median_flux_error) : "—"));
+        per_case.add_row(std::move(row));
     }
     doc.add(std::move(per_case));
     if (designs) {
@@ -742,6 +777,8 @@ std::string study_csv(const StudyRun& run) {
                  "not_in_library", "ties", "median_abs_error_rs", "median_abs_error_ld", "median_abs_error_lq", "median_abs_error_psi_f",
                  "coverage_rs", "coverage_ld", "coverage_lq", "coverage_psi_f", "coverage_drives", "mean_seconds"};
     if (designs) columns.insert(columns.begin(), Column("design"));
+    // Always there (empty where the plant's flux is linear), so that a subset of a study has the columns of the whole.
+    columns.insert(columns.end() - 1, Column("median_flux_error"));
     Table table("detection per case", std::move(columns));
     auto g6 = [](double v) { return fmt::format("{:.6g}", v); };
     for (std::size_t c = 0; c < run.cases.size(); ++c) {
@@ -758,6 +795,7 @@ std::string study_csv(const StudyRun& run) {
                        std::to_string(*std::max_element(x.intervals.begin(), x.intervals.end())),
                        fmt::format("{:.4g}", x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)))};
         if (designs) row.insert(row.begin(), Cell(run.cases[c].design));
+        row.insert(row.end() - 1, Cell(std::isfinite(x.median_flux_error) ? g6(x.median_flux_error) : std::string()));
         table.add_row(std::move(row));
     }
     return csv(table);
@@ -796,6 +834,8 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"noise", r.noise}});
     // Only when some were named, so that the records of drives without a whole turn stay as they were.
     if (!r.mechanical_orders.empty()) out["mechanical_orders"] = r.mechanical_orders;
+    // Only where the plant's flux is not linear (StudyRecord::flux_error).
+    if (std::isfinite(r.flux_error)) out["flux_error"] = r.flux_error;
     out["seconds"] = r.seconds;
     return out;
 }

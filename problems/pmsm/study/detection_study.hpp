@@ -10,6 +10,7 @@
 // (`plant.inverter.dead_time = 1e-6`) alike. Cases: clean data, each effect alone at both
 // magnitudes, pairs and listed triples at the clear magnitude, and effects the library lacks.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -144,6 +145,9 @@ struct StudyRecord {
     // Power of the significant structure the recommended model leaves in the residual, relative to
     // the noise's (0: none significant): what a misspecification mark on the intervals would read.
     double structure_left = 0.0;
+    // Where the plant's flux linkage is not linear (saturating iron, a measured map): the recommended
+    // model's flux at the logged currents against the plant's, rms relative error (NaN otherwise).
+    double flux_error = std::nan("");
     double rms = 0.0, rms_recommended = 0.0, noise = 0.0;  // V
     double seconds = 0.0;               // simulate + diagnose, wall
 };
