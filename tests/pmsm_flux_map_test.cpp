@@ -231,6 +231,12 @@ TEST_CASE("on the measured map at high speed and large currents, what the satura
     CHECK(last.structure > DiagnosisOptions{}.floor_tolerance);
     CHECK(last.at_noise_floor);
     CHECK_THAT(last.allowance.source, Catch::StartsWith("saturation (2 %"));
+    // Then the intervals, which count only the noise, are marked not valid, in the flag and in words.
+    CHECK(d.law_error_beyond_noise);
+    CHECK_FALSE(d.recommended_intervals_valid());
+    CHECK(std::any_of(d.findings.begin(), d.findings.end(), [](const std::string& f) {
+        return f.find("within what the stated accuracy of the law of saturation") != std::string::npos && f.find("not valid") != std::string::npos;
+    }));
     // The allowance from its definition: (0.02)^2 times the power of u - Rs i over the noise power.
     const double rs = last.fit.values[0];
     const double flux_voltage = (data.u_d - rs * data.i_d).squaredNorm() + (data.u_q - rs * data.i_q).squaredNorm();

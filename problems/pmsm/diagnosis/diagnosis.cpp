@@ -60,6 +60,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.not_in_library = r.not_in_library;
     out.incomplete = r.incomplete;
     const ModelFit& recommended = out.recommended.text() == out.model.spec.text() ? out.model : out.path.back().fit;
+    const PathStep& last = out.path.back();
+    out.law_error_beyond_noise = &recommended == &last.fit && last.at_noise_floor && last.structure >= options.floor_tolerance;
     out.detection_limits = detection_limits(design, data.size(), recommended, screen.library, out.noise);
     for (const auto& h : trace.left.back().mechanical_harmonics)
         if (h.significant) out.mechanical_left.push_back(h);

@@ -219,6 +219,9 @@ struct Diagnosis {
     // The recommended set explains most of the excess residual but not all: something else is
     // missing too, of the signature its residual shows (path.back().signature).
     bool incomplete = false;
+    // The recommended set reaches the noise floor only by its laws' stated accuracy: what it leaves is
+    // more than the noise's tolerance, the law's own error, which its intervals do not count.
+    bool law_error_beyond_noise = false;
     // The search over sets of effects (forward selection with backward pruning, docs/effects.md):
     // the steps from the model diagnosed to the last set the evidence supports, the effects pruned
     // again because the others explain them, and the recommendation: the last set when it reaches
@@ -237,7 +240,7 @@ struct Diagnosis {
     // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
     // only when nothing the data show is left out of it (an interval assumes the residual is noise).
     bool model_intervals_valid() const { return !missing_effect_found && !not_in_library; }
-    bool recommended_intervals_valid() const { return !incomplete && !not_in_library && tie.empty(); }
+    bool recommended_intervals_valid() const { return !incomplete && !not_in_library && tie.empty() && !law_error_beyond_noise; }
 };
 
 // Fits `spec` to `data` and answers where it fails, what is missing and how sure that is: the

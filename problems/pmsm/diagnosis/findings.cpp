@@ -115,7 +115,7 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
     else if (!last.signature.empty() && last.structure >= floor_tolerance)
         f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: more than the tolerance of {:.2f}, within what "
                                 "the stated accuracy of the law of {} allows on this log ({:.2f}). It is that law's own error; a larger one "
-                                "would mean another effect.",
+                                "would mean another effect. The intervals count only the noise, not that error: they are not valid.",
                                 last.signature, last.structure, floor_tolerance, last.allowance.source, floor_tolerance + last.allowance.power));
     else if (!last.signature.empty())
         f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
