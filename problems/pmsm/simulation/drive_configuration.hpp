@@ -43,6 +43,11 @@ struct Logging {
     bool shaft_angle = false;     // log the encoder's mechanical angle theta_m
     bool time = true;             // log t
     bool temperatures = false;    // log temp_winding and temp_magnet
+    // Log each segment's settling too, as a bench logs everything: a raw log of steps, ramps and
+    // steady stretches. Its rows draw their noise from a stream of their own, so the steady rows
+    // are those of the same drive logged without transients, bit for bit.
+    bool transients = false;
+    bool segment = true;          // write the segment column (false: a log without operating points)
 };
 
 // Standard deviations of white sensor noise, entering where a real drive's would.
@@ -87,6 +92,7 @@ struct SegmentRows {
     Eigen::Index first_row = 0;
     Eigen::Index rows = 0;
     double start_time = 0.0;  // s, when the segment's references were applied
+    Eigen::Index settle_first_row = 0;  // first logged row of its settling (first_row unless transients are logged)
 };
 
 struct SimulationResult {

@@ -52,11 +52,18 @@ SimulationResult simulate(const DriveSimulation& spec) {
     const Complex log_offset = plant->logged_voltage_offset();
 
     Rng rng(spec.seed);
+    Rng transient_rng(derive_seed(spec.seed, "logging", "transients", 0));
     LowPass f_id(spec.logging.filter_cutoff, ts), f_iq(spec.logging.filter_cutoff, ts), f_ud(spec.logging.filter_cutoff, ts),
         f_uq(spec.logging.filter_cutoff, ts), f_w(spec.logging.filter_cutoff, ts);
 
+    const auto settle_controls_of = [&](const Segment& s) { return static_cast<std::int64_t>(std::llround(s.settle / ts)); };
+    // The settling is logged on the window's own grid, backwards from its first sample, so each
+    // segment's samples are evenly spaced.
+    const auto settle_rows_of = [&](const Segment& s) {
+        return spec.logging.transients ? settle_controls_of(s) / controls_per_log : std::int64_t{0};
+    };
     std::int64_t total_samples = 0;
-    for (const auto& s : spec.segments) total_samples += s.samples;
+    for (const auto& s : spec.segments) total_samples += s.samples + settle_rows_of(s);
     SimulationResult result;
     Measurement& m = result.data;
     m.i_d.resize(total_samples);
@@ -78,13 +85,15 @@ SimulationResult simulate(const DriveSimulation& spec) {
 
     for (std::size_t seg = 0; seg < spec.segments.size(); ++seg) {
         const Segment& segment = spec.segments[seg];
-        const auto settle_controls = static_cast<std::int64_t>(std::llround(segment.settle / ts));
+        const auto settle_controls = settle_controls_of(segment);
+        const std::int64_t first_logged = settle_controls - settle_rows_of(segment) * controls_per_log;
         const std::int64_t controls = settle_controls + segment.samples * controls_per_log;
         // Segments sharing a label share its index (labels are distinct, in order of first use).
         const auto label_it = std::find(m.segment_labels.begin(), m.segment_labels.end(), segment.label);
         const int label_index = static_cast<int>(label_it - m.segment_labels.begin());
         if (label_it == m.segment_labels.end()) m.segment_labels.push_back(segment.label);
-        result.segments.push_back({segment.label, row, segment.samples, static_cast<double>(control_index) * ts});
+        result.segments.push_back({segment.label, row + settle_rows_of(segment), segment.samples,
+                                   static_cast<double>(control_index) * ts, row});
 
         for (std::int64_t j = 0; j < controls; ++j, ++control_index) {
             const double t = static_cast<double>(control_index) * ts;
@@ -98,11 +107,12 @@ SimulationResult simulate(const DriveSimulation& spec) {
             const double id_f = f_id.update(i_c.real()), iq_f = f_iq.update(i_c.imag());
             const double ud_f = f_ud.update(u_ref.real()), uq_f = f_uq.update(u_ref.imag());
             const double w_f = f_w.update(omega_c);
-            if (j >= settle_controls && (j - settle_controls) % controls_per_log == 0) {
+            if (j >= first_logged && (j - first_logged) % controls_per_log == 0) {
+                Rng& log_rng = j < settle_controls ? transient_rng : rng;
                 m.i_d[row] = id_f;
                 m.i_q[row] = iq_f;
-                m.u_d[row] = ud_f + (spec.noise.voltage > 0 ? spec.noise.voltage * rng.normal() : 0.0);
-                m.u_q[row] = uq_f + (spec.noise.voltage > 0 ? spec.noise.voltage * rng.normal() : 0.0);
+                m.u_d[row] = ud_f + (spec.noise.voltage > 0 ? spec.noise.voltage * log_rng.normal() : 0.0);
+                m.u_q[row] = uq_f + (spec.noise.voltage > 0 ? spec.noise.voltage * log_rng.normal() : 0.0);
                 if (log_offset != Complex{}) {
                     m.u_d[row] += log_offset.real();
                     m.u_q[row] += log_offset.imag();
@@ -113,14 +123,18 @@ SimulationResult simulate(const DriveSimulation& spec) {
                 if (m.theta_m) (*m.theta_m)[row] = reading.shaft_angle;
                 if (m.temp_winding) {
                     const Temperatures temperatures = plant->temperatures(t);
-                    (*m.temp_winding)[row] = temperatures.winding + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);
-                    (*m.temp_magnet)[row] = temperatures.magnet + (spec.noise.temperature > 0 ? spec.noise.temperature * rng.normal() : 0.0);
+                    (*m.temp_winding)[row] = temperatures.winding + (spec.noise.temperature > 0 ? spec.noise.temperature * log_rng.normal() : 0.0);
+                    (*m.temp_magnet)[row] = temperatures.magnet + (spec.noise.temperature > 0 ? spec.noise.temperature * log_rng.normal() : 0.0);
                 }
                 m.segment[row] = label_index;
                 ++row;
             }
             plant->run_control_period(t, u_ref, reading, omega_c, segment);
         }
+    }
+    if (!spec.logging.segment) {
+        m.segment_labels.clear();
+        m.segment.resize(0);
     }
     result.simulated_time = static_cast<double>(control_index) * ts;
     result.integration_steps = plant->integration_steps();

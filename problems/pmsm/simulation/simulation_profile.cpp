@@ -434,13 +434,15 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
     {
         const auto& t = subtable(file, root, "logging");
         TableReader r(file, t, "logging", 0);
-        r.allow_only({"period", "filter_cutoff", "theta", "theta_m", "time", "temperatures"});
+        r.allow_only({"period", "filter_cutoff", "theta", "theta_m", "time", "temperatures", "transients", "segment"});
         auto& l = sim.logging;
         l.period = r.number("period", l.period, 0.0, 1e3, true);
         l.filter_cutoff = r.number("filter_cutoff", l.filter_cutoff, 0.0, 1e9);
         l.theta = r.boolean("theta", l.theta);
         l.shaft_angle = r.boolean("theta_m", l.shaft_angle);
         l.time = r.boolean("time", l.time);
+        l.transients = r.boolean("transients", l.transients);
+        l.segment = r.boolean("segment", l.segment);
         if (const auto* n = t.get("period")) period_line = line_of(*n);
     }
     // Grids: the plant steps must tile a control period, control periods a logging period.
@@ -491,6 +493,9 @@ DriveSimulation parse_simulation_profile(const std::string& text, const std::str
     for (std::size_t k = 0; k < list->size(); ++k) {
         sim.segments.push_back(read_segment(file, (*list)[k], k, sim.logging.period));
         total_samples += sim.segments.back().samples;
+        if (sim.logging.transients)
+            total_samples += std::llround(sim.segments.back().settle / sim.control.control_period) /
+                             std::llround(sim.logging.period / sim.control.control_period);
         // Checked before anything is simulated: the whole measurement is held in memory and written as one CSV.
         if (total_samples > max_measurement_rows)
             throw InputError(file, line_of((*list)[k]), fmt::format("segment[{}]", k + 1),
@@ -544,6 +549,8 @@ nlohmann::ordered_json simulation_sidecar(const DriveSimulation& spec, const Sim
                     {"theta", spec.logging.theta}, {"time", spec.logging.time}, {"temperatures", spec.logging.temperatures}};
     // Written only when logged, so that the sidecars of profiles that never log it stay as they were.
     if (spec.logging.shaft_angle) j["logging"]["theta_m"] = true;
+    if (spec.logging.transients) j["logging"]["transients"] = true;
+    if (!spec.logging.segment) j["logging"]["segment"] = false;
     j["noise"] = {{"current", spec.noise.current}, {"speed", spec.noise.speed}, {"voltage", spec.noise.voltage},
                   {"temperature", spec.noise.temperature}};
     auto points = [](const TemperatureProfile& p) {
@@ -570,6 +577,8 @@ nlohmann::ordered_json simulation_sidecar(const DriveSimulation& spec, const Sim
         segments.push_back({{"label", s.label}, {"speed_rpm", s.speed_rpm}, {"load_torque", s.load_torque}, {"i_d", s.i_d},
                             {"settle", s.settle}, {"samples", s.samples}, {"first_row", result.segments[k].first_row},
                             {"start_time", result.segments[k].start_time}});
+        // The raw log's truth for finding operating points: where each segment's settling is logged.
+        if (spec.logging.transients) segments.back()["settle_first_row"] = result.segments[k].settle_first_row;
     }
     j["segments"] = segments;
     return j;
