@@ -32,6 +32,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
+        const auto found = find_operating_points_option(*o, data);
         pmsm::DiagnosisOptions options;
         options.fit = fit_options(*o);
         options.pole_pairs = columns.pole_pairs.value_or(0);
@@ -43,6 +44,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;
+            if (found) out["operating_points"] = operating_points_json(*found);
             replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);
         }

@@ -25,12 +25,14 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         check_optimizer_option(o->optimizer);
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
-        const auto data = read_data_option(*o, columns);
+        auto data = read_data_option(*o, columns);
+        const auto found = find_operating_points_option(*o, data);
         const auto fit = pmsm::fit_model(data, spec, fit_options(*o));
         fmt::print("{}", pmsm::fit_text(fit, data));
         if (!o->json.empty()) {
             auto out = pmsm::fit_json(fit);
             out["data"] = o->data;
+            if (found) out["operating_points"] = operating_points_json(*found);
             replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);
         }

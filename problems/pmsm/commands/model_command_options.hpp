@@ -7,6 +7,7 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
 #include "framework/cli/option_ranges.hpp"
@@ -14,6 +15,7 @@
 #include "framework/registry.hpp"
 #include "problems/pmsm/data/column_map.hpp"
 #include "problems/pmsm/data/measurement.hpp"
+#include "problems/pmsm/data/operating_points.hpp"
 #include "problems/pmsm/data/settled_measurement.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
 
@@ -31,6 +33,7 @@ struct ModelCommandOptions {
     std::uint64_t seed = 1;
     std::int64_t search_rows = pmsm::FitOptions{}.search_rows;
     int threads = 0;
+    pmsm::OperatingPointOptions steady;
 };
 
 inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::string& model_help,
@@ -54,6 +57,15 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
         ->check(whole_number_in<std::int64_t>(0, pmsm::max_measurement_rows));
     cmd->add_option("--threads", o.threads, "worker threads (default: all cores); results do not depend on it")
         ->check(whole_number_in<int>(1, 4096));
+    cmd->add_option("--steady-bandwidth", o.steady.bandwidth,
+                    "log without a segment column: rows a side of the moving-sum test that finds its steady windows")
+        ->check(whole_number_in<Eigen::Index>(2, 1'000'000));
+    cmd->add_option("--steady-min-rows", o.steady.min_rows,
+                    "log without a segment column: shortest steady window kept (0: three bandwidths)")
+        ->check(whole_number_in<Eigen::Index>(0, pmsm::max_measurement_rows));
+    cmd->add_option("--steady-false-alarm", o.steady.false_alarm,
+                    "log without a segment column: probability of a false change in a log without any")
+        ->check(number_in(1e-12, 0.5));
     cmd->add_option("--json", o.json, json_help);
 }
 
@@ -89,6 +101,32 @@ inline pmsm::Measurement read_data_option(const ModelCommandOptions& o, const pm
     if (data.warnings.size() > shown)
         std::fprintf(stderr, "warning: %s: %zu more warnings like these not shown\n", o.data.c_str(), data.warnings.size() - shown);
     return data;
+}
+
+// A log without a segment column: its steady windows, found by the moving-sum test, become its
+// segments and the transients between them are dropped, so that everything that needs operating
+// points has them. A given segment column always wins. Says what was found on stdout.
+inline std::optional<pmsm::OperatingPoints> find_operating_points_option(const ModelCommandOptions& o, pmsm::Measurement& data) {
+    if (data.has_segments()) return std::nullopt;
+    auto points = pmsm::find_operating_points(data, o.steady);
+    data = pmsm::select_operating_points(std::move(data), points);
+    std::printf("%s\n\n", pmsm::operating_points_summary(points).c_str());
+    return points;
+}
+
+// The operating points as JSON, for fit's and diagnose's output.
+inline nlohmann::ordered_json operating_points_json(const pmsm::OperatingPoints& p) {
+    nlohmann::ordered_json windows = nlohmann::ordered_json::array();
+    for (const auto& w : p.windows) windows.push_back({{"first_row", w.first + 1}, {"rows", w.rows}});
+    return {{"found_automatically", true},
+            {"method", "moving-sum change-point test on i_d, i_q, omega_e (docs/diagnosis.md)"},
+            {"bandwidth_rows", p.bandwidth},
+            {"min_rows", p.min_rows},
+            {"false_alarm", p.false_alarm},
+            {"threshold", p.threshold},
+            {"rows", p.rows},
+            {"transient_rows", p.transient_rows},
+            {"steady_windows", windows}};
 }
 
 // `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.
