@@ -13,6 +13,7 @@
 //    speed at their means (the logged angle and the temperature trend kept). An effect whose Jacobian
 //    columns lie in the span of the model's own there is absorbed without trace; hypothetical extra
 //    operating points show which experiment would reveal it.
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,15 @@ struct NoiseEstimate {
     Eigen::Vector2d long_run{0.0, 0.0}; // long-run standard deviation per axis (V): sigma of a mean times sqrt(n)
     double effective_samples = 0.0;     // both axes: sum of n sigma^2 / long_run^2
     double dispersion = 1.0;            // lack of fit of that model's segment means per degree of freedom, at least 1
+    // Measured from the data, not from a model (noise.hpp, difference_noise): per axis the standard
+    // deviation of the logged voltage's noise from its sample-to-sample differences within segments,
+    // the lag-one correlation that corrects it, and the pairs of consecutive rows used.
+    Eigen::Vector2d difference_sigma{0.0, 0.0};
+    Eigen::Vector2d difference_correlation{0.0, 0.0};
+    double difference_pairs = 0.0;
+    // Per axis: the evidence is measured in the difference-based noise instead of the residual's,
+    // because the residual holds structure within segments (noise.hpp, noise_of_best).
+    std::array<bool, 2> from_differences{false, false};
 };
 
 // A hypothetical operating point added to the design, and what it would do for an effect.

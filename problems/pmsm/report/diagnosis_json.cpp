@@ -1,4 +1,5 @@
 #include "problems/pmsm/report/diagnosis_report.hpp"
+#include "problems/pmsm/diagnosis/noise.hpp"
 
 #include "problems/pmsm/report/fit_report.hpp"
 
@@ -120,7 +121,12 @@ json diagnosis_json(const Diagnosis& d) {
                     {"sigma", {{"u_d", d.noise.sigma[0]}, {"u_q", d.noise.sigma[1]}}},
                     {"long_run_sigma", {{"u_d", d.noise.long_run[0]}, {"u_q", d.noise.long_run[1]}}},
                     {"effective_samples", d.noise.effective_samples},
-                    {"dispersion", d.noise.dispersion}};
+                    {"dispersion", d.noise.dispersion},
+                    {"from_differences", {{"method", "first differences of the residual within segments, corrected for their lag-one correlation"},
+                                   {"sigma", {{"u_d", d.noise.difference_sigma[0]}, {"u_q", d.noise.difference_sigma[1]}}},
+                                   {"correlation", {{"u_d", d.noise.difference_correlation[0]}, {"u_q", d.noise.difference_correlation[1]}}},
+                                   {"pairs", d.noise.difference_pairs},
+                                   {"used_for_evidence", {{"u_d", d.noise.from_differences[0]}, {"u_q", d.noise.from_differences[1]}}}}}};
     out["lack_of_fit"] = lack_of_fit_json(d.lack_of_fit);
     if (d.after_winner) out["lack_of_fit_after_winner"] = lack_of_fit_json(*d.after_winner);
     out["loso_rms"] = d.model_loso_rms ? json(*d.model_loso_rms) : json(nullptr);

@@ -1,4 +1,5 @@
 #include "problems/pmsm/report/diagnosis_report.hpp"
+#include "problems/pmsm/diagnosis/noise.hpp"
 
 #include <cmath>
 
@@ -20,6 +21,19 @@ std::string path_text(const Diagnosis& d) {
 
 }  // namespace
 
+std::string noise_from_data_text(const NoiseEstimate& n) {
+    std::string t = fmt::format("noise from sample-to-sample differences (first differences of the residual within segments, corrected for "
+                                "their lag-one correlation): u_d {:.3g} V (correlation {:.2f}), u_q {:.3g} V (correlation {:.2f})",
+                                n.difference_sigma[0], n.difference_correlation[0], n.difference_sigma[1], n.difference_correlation[1]);
+    const bool d = n.from_differences[0], q = n.from_differences[1];
+    if (d || q)
+        t += fmt::format("; the evidence is measured in it on {}: the residual's noise exceeds it more than {}-fold, so it holds structure",
+                         d && q ? "both axes" : d ? "u_d" : "u_q", residual_structure_ratio);
+    else
+        t += "; the evidence is measured in the residual's noise, within " + fmt::format("{}", residual_structure_ratio) + "-fold of it";
+    return t;
+}
+
 std::string diagnosis_text(const Diagnosis& d) {
     std::string t = fmt::format("data: {} ({} samples in {} segments)\nmodel: {}: residual rms u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n\n",
                                 d.source, d.samples, d.segments.size(), d.model.spec.text(), d.model.rms.d, d.model.rms.q, d.model.rms.total);
@@ -33,6 +47,7 @@ std::string diagnosis_text(const Diagnosis& d) {
     t += "\n" + path_text(d) + "\n";
     for (const auto& f : d.findings) t += "- " + f + "\n";
     if (!d.lack_of_fit.mechanical_angle.empty()) t += "mechanical orders (k/p of the electrical frequency): " + d.lack_of_fit.mechanical_angle + "\n";
+    t += noise_from_data_text(d.noise) + "\n";
     if (!d.detection_limits.empty()) {
         t += "\ndetection limits of this log: the smallest size at which each effect left out would be found (in about half of such logs)\n";
         for (const auto& l : d.detection_limits) {
