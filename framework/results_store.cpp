@@ -269,9 +269,13 @@ ExperimentInfo experiment_from_json(const json& j) {
     }
     if (j.contains("anytime")) {
         const auto& a = j["anytime"];
-        info.anytime = AnytimeSpec{a.at("targets").get<std::vector<double>>(), a.at("ert_targets").get<std::vector<double>>(),
-                                   a.at("points_per_decade").get<int>(), a.at("bootstrap").get<int>(),
-                                   a.value("iteration_trace", true)};
+        AnytimeSpec spec;
+        spec.targets = a.at("targets").get<std::vector<double>>();
+        spec.ert_targets = a.at("ert_targets").get<std::vector<double>>();
+        spec.points_per_decade = a.at("points_per_decade").get<int>();
+        spec.bootstrap = a.at("bootstrap").get<int>();
+        spec.iteration_trace = a.value("iteration_trace", true);
+        info.anytime = std::move(spec);
         if (a.contains("checkpoints")) {
             const auto& c = a["checkpoints"];
             info.anytime->checkpoints = c.at("fractions").get<std::vector<double>>();

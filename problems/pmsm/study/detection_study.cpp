@@ -371,10 +371,22 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
         return toml_text(merged);
     };
     std::vector<StudyCase> cases;
-    cases.push_back({"clean", "clean", "", {}, false, ""});
-    for (const auto& e : spec.effects) cases.push_back({e.label, "single", "clear", {e.name}, false, combine({{e.label, e.clear}}), {{e.name, e.clear_size}}});
+    // Named members, not a brace list: the design and the outside cases' own fields stay at their defaults.
+    auto add_case = [&](std::string label, std::string kind, std::string magnitude, std::vector<std::string> truth, std::string settings,
+                        std::map<std::string, std::map<std::string, double>> sizes) -> StudyCase& {
+        StudyCase c;
+        c.label = std::move(label);
+        c.kind = std::move(kind);
+        c.magnitude = std::move(magnitude);
+        c.truth = std::move(truth);
+        c.settings = std::move(settings);
+        c.sizes = std::move(sizes);
+        return cases.emplace_back(std::move(c));
+    };
+    add_case("clean", "clean", "", {}, "", {});
+    for (const auto& e : spec.effects) add_case(e.label, "single", "clear", {e.name}, combine({{e.label, e.clear}}), {{e.name, e.clear_size}});
     for (const auto& e : spec.effects)
-        if (!e.weak.empty()) cases.push_back({e.label, "single", "weak", {e.name}, false, combine({{e.label, e.weak}}), {{e.name, e.weak_size}}});
+        if (!e.weak.empty()) add_case(e.label, "single", "weak", {e.name}, combine({{e.label, e.weak}}), {{e.name, e.weak_size}});
     std::vector<std::vector<std::string>> pairs = spec.pairs;
     if (spec.all_pairs)
         for (std::size_t a = 0; a < spec.effects.size(); ++a)
@@ -398,13 +410,17 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
             truth.push_back(e.name);
         }
         std::sort(truth.begin(), truth.end());
-        cases.push_back({joined(names, "+"), kind, "clear", truth, false, combine(parts), sizes});
+        add_case(joined(names, "+"), kind, "clear", truth, combine(parts), sizes);
     };
     for (const auto& p : pairs) add_combination(p, "pair");
     for (const auto& t : spec.triples) add_combination(t, "triple");
-    for (const auto& o : spec.outside)
-        cases.push_back({"outside:" + o.name, "outside", "clear", {}, true, combine({{o.name, o.settings}}), {}, "", "", o.profile, o.profile_text,
-                         o.mechanical_order});
+    for (const auto& o : spec.outside) {
+        StudyCase& c = add_case("outside:" + o.name, "outside", "clear", {}, combine({{o.name, o.settings}}), {});
+        c.outside = true;
+        c.profile = o.profile;
+        c.profile_text = o.profile_text;
+        c.mechanical_order = o.mechanical_order;
+    }
     if (!spec.profile_effects.empty())
         for (auto& c : cases) {
             std::vector<std::string> truth;
