@@ -51,8 +51,8 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     // Once the set is at the noise floor, what it leaves is of the size the steady-state model's own
     // error may have (the switching ripple; a saturation law that follows a measured map to 2 %): an
     // effect missing on top of it must be most of that remainder, not a slice of it. Measured on the
-    // Baldor study (docs/effects.md): a voltage, encoder or current offset that took 10-15 % of what
-    // the saturation law leaves was added in 90 of 240 drives.
+    // Baldor study (docs/effects.md): a voltage, encoder or current offset that took about a tenth of
+    // what the saturation law leaves was added in 90 of 240 drives.
     double share = relevant_share;
     if (!current.spec.effects.empty()) {
         Eigen::VectorXd storage;

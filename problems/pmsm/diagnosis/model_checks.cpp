@@ -66,9 +66,10 @@ LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const N
     LawAllowance out;
     if (fit.spec.effects.empty()) return out;
     double accuracy = 0.0;
-    const auto model = make_model(fit.spec, data);
-    for (const auto& effect : model->effects())
-        if (effect->law_accuracy() > accuracy) {
+    // The accuracy is the law's, not the fit's: an effect made from its name says it, without the
+    // pass over the rows that a model of the data would make for its operating scale.
+    for (const auto& term : fit.spec.effects)
+        if (const auto effect = make_effect(term.name); effect->law_accuracy() > accuracy) {
             accuracy = effect->law_accuracy();
             out.source = fmt::format("{} ({:g} % of the flux linkage)", effect->name(), 100.0 * accuracy);
         }
