@@ -66,6 +66,19 @@ public:
                                max_band_fraction);
         return {};
     }
+    // Each turn-on edge comes t_d late whatever the current's sign, so every pulse's centre moves by
+    // t_d / 2 and the current sampled at the carrier peak is its period average plus t_d / 2 of
+    // L^-1 u: the fit then sees R / (1 + R t_d / (2 L)), and the flux terms likewise. A shift of
+    // half a microsecond is far below any log's delay limit, so only the inverter's settings say it.
+    std::string unseen_bias(const double* base) const override {
+        const double per_microsecond = 100.0 * 0.5e-6 * base[0] / std::min(base[1], base[2]);
+        if (!(per_microsecond > 0.0)) return {};
+        return fmt::format("dead time shifts each PWM pulse by half the dead time t_d, so currents sampled at the carrier peak are not "
+                           "their period averages: Rs, Ld, Lq and psi_f read low by about Rs t_d / (2 L), up to {:.2g} % per microsecond "
+                           "of t_d here (t_d = deadtime.voltage / (f_sw V_dc) less the devices' share); the intervals do not hold it",
+                           per_microsecond);
+    }
+
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
             const TerminalLoss loss(p[0], p[1]);

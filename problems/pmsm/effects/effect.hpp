@@ -161,6 +161,9 @@ public:
     // fraction of the flux linkage (0: exact, as an offset or a delay is). Residual structure within
     // it is the law's own error, not a missing effect (docs/diagnosis.md, "The laws' accuracy").
     virtual double law_accuracy() const { return 0.0; }
+    // A bias the effect puts on the base parameters that no steady-state log can show, so that no
+    // interval holds it, told to the user (empty: none). `base` holds Rs, Ld, Lq and psi_f as fitted.
+    virtual std::string unseen_bias(const double* /*base*/) const { return {}; }
 
     // ---- what the data allow ----
     // Narrows the plausible range [lo, hi] of real parameter k to what data of this scale() can tell

@@ -555,6 +555,15 @@ Eigen::Index ModelFit::index_of(const std::string& name) const {
     return -1;
 }
 
+std::vector<std::string> ModelFit::unseen_biases() const {
+    std::vector<std::string> out;
+    if (values.size() < 4) return out;
+    // The bias is the law's, not the fit's: an effect made from its name says it.
+    for (const auto& term : spec.effects)
+        if (auto text = make_effect(term.name)->unseen_bias(values.data()); !text.empty()) out.push_back(std::move(text));
+    return out;
+}
+
 bool ModelFit::beyond_range(Eigen::Index j) const {
     if (j < 4 || !free[static_cast<std::size_t>(j)] || periodic[static_cast<std::size_t>(j)]) return false;
     const double tolerance = 1e-9 * (range_upper[j] - range_lower[j]);

@@ -86,6 +86,9 @@ struct ModelFit {
     // Free effect parameter outside its plausible range for these data (inside the declared range the
     // fit searched, SteadyStateModel::plausible).
     bool beyond_range(Eigen::Index j) const;
+    // What the model's effects do to the base parameters that no log shows (Effect::unseen_bias), one
+    // sentence each: biases the intervals do not hold.
+    std::vector<std::string> unseen_biases() const;
 };
 
 // Fits `spec` to all rows of `data`. Effect parameters listed in `search` (indices into the model's

@@ -1,0 +1,58 @@
+// The dead-time effect against the device plant, which switches each leg with its dead time instead
+// of applying the effect's averaged loss: what the effect's law follows, and the bias it states that
+// no log shows (Effect::unseen_bias).
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+
+#include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/simulation/drive_simulator.hpp"
+#include "problems/pmsm/simulation/simulation_profile.hpp"
+
+using namespace mhb;
+using namespace mhb::pmsm;
+
+namespace {
+
+// The device study's clean drive (nine operating points at +-10 and +-45 r/min) with a dead time
+// and no noise, fitted with base+deadtime: the base parameters' relative errors.
+Eigen::Vector4d relative_errors_with_dead_time(double dead_time) {
+    auto drive = read_simulation_profile(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "device_diagnosis_profile.toml");
+    drive.noise = SensorNoise{};
+    drive.device->inverter.dead_time = dead_time;
+    const auto result = simulate(drive);
+    const ModelFit fit = fit_model(result.data, parse_model_spec("base+deadtime"), FitOptions{});
+    const Eigen::Vector4d truth{drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f};
+    return fit.values.head<4>().cwiseQuotient(truth).array() - 1.0;
+}
+
+}  // namespace
+
+TEST_CASE("dead time biases the base parameters by the pulse shift the effect states", "[pmsm][deadtime]") {
+    // Every turn-on edge comes t_d late, so each pulse's centre moves by t_d / 2 and the current
+    // sampled at the carrier peak is its period average plus t_d / 2 of L^-1 u: the fit sees
+    // R / (1 + R t_d / (2 L)), and psi_f likewise (derived in docs/diagnosis.md, section 4). The
+    // plant knows nothing of that formula: it switches the legs.
+    const double rs = 46.0, l = 0.02025;
+    for (const double dead_time : {1e-6, 2e-6}) {
+        INFO("t_d = " << dead_time);
+        const double predicted = -rs * dead_time / (2.0 * l);
+        const Eigen::Vector4d error = relative_errors_with_dead_time(dead_time);
+        // Measured at 1 and 2 us: R_s 1.13 and 1.10 times the prediction, psi_f 0.89 and 0.90 times.
+        CHECK(error[0] / predicted == Approx(1.0).margin(0.3));
+        CHECK(error[3] / predicted == Approx(1.0).margin(0.3));
+    }
+}
+
+TEST_CASE("a fit holding dead time states its pulse-shift bias per microsecond", "[pmsm][deadtime]") {
+    ModelFit fit;
+    fit.spec = parse_model_spec("base+deadtime");
+    fit.values = Eigen::VectorXd::Zero(6);
+    fit.values.head<4>() << 46.0, 0.02025, 0.03, 0.04375;
+    const auto biases = fit.unseen_biases();
+    REQUIRE(biases.size() == 1);
+    // R_s / (2 L) per microsecond with the smaller inductance: 46 / 0.0405 * 1e-6 = 0.114 %.
+    CHECK(biases.front().find("up to 0.11 % per microsecond") != std::string::npos);
+    fit.spec = parse_model_spec("base+voltage_offset");
+    CHECK(fit.unseen_biases().empty());
+}
