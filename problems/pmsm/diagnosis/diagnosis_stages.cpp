@@ -181,7 +181,9 @@ Recommendation recommend(const ModelSpec& spec, const SetSearch& search, const P
         r.after_winner = trace.left[1];
     }
     if (!r.tie.empty()) r.tie_experiments = revealing_experiments(design, proposals, search.tie_spec, search.tie_values, r.tie[0], r.tie[1]);
-    r.not_in_library = model_left.significant && !found && r.tie.empty();
+    // Structure below the floor's tolerance is at the floor (the search table says so, and the search
+    // stops there): no effect is missing, so none can be missing from the library either.
+    r.not_in_library = model_left.significant && !trace.path.front().at_noise_floor && !found && r.tie.empty();
     return r;
 }
 

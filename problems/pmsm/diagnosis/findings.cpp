@@ -81,6 +81,22 @@ void model_findings(const Diagnosis& d, std::vector<std::string>& f) {
     for (const auto& p : d.base_problems) f.push_back("The fitted model is physically impossible: " + p + ". Something is missing or the design cannot determine it.");
 }
 
+// What a step at the noise floor still leaves, when the segment-mean or harmonic tests see it: the
+// law's own error within its stated accuracy, or the steady-state model's own error below the
+// tolerance. Empty when nothing significant is left.
+std::string structure_at_floor(const PathStep& last, double floor_tolerance) {
+    if (last.signature.empty()) return {};
+    if (last.structure >= floor_tolerance)
+        return fmt::format("Some structure remains ({}), with {:.2f} of the noise power: more than the tolerance of {:.2f}, within what "
+                           "the stated accuracy of the law of {} allows on this log ({:.2f}). It is that law's own error; a larger one "
+                           "would mean another effect. The intervals count only the noise, not that error: they are not valid.",
+                           last.signature, last.structure, floor_tolerance, last.allowance.source, floor_tolerance + last.allowance.power);
+    return fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
+                       "the steady-state model's own error on effects that make the currents ripple; a larger one would mean "
+                       "another effect.",
+                       last.signature, last.structure, floor_tolerance);
+}
+
 // The effects the search added: one, or a set step by step; what structure they leave.
 void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std::string>& f) {
     const auto& m = d.model;
@@ -112,16 +128,8 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
                                 "are not valid (they take that structure for noise), and its values hold only as far as the structure does not bias them.",
                                 last.fit.spec.text(), 100.0 * last.explained, floor,
                                 last.signature.empty() ? std::string("structure beyond the noise") : last.signature));
-    else if (!last.signature.empty() && last.structure >= floor_tolerance)
-        f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: more than the tolerance of {:.2f}, within what "
-                                "the stated accuracy of the law of {} allows on this log ({:.2f}). It is that law's own error; a larger one "
-                                "would mean another effect. The intervals count only the noise, not that error: they are not valid.",
-                                last.signature, last.structure, floor_tolerance, last.allowance.source, floor_tolerance + last.allowance.power));
-    else if (!last.signature.empty())
-        f.push_back(fmt::format("Some structure remains ({}), with {:.2f} of the noise power: below the tolerance of {:.2f}. It is the size of "
-                                "the steady-state model's own error on effects that make the currents ripple; a larger one would mean "
-                                "another effect.",
-                                last.signature, last.structure, floor_tolerance));
+    else if (const std::string rest = structure_at_floor(last, floor_tolerance); !rest.empty())
+        f.push_back(rest);
     if (d.winner) {
         const Candidate* w = candidate_of(d, *d.winner);
         if (w && w->identifiability == Identifiability::MostlyAbsorbed)
@@ -133,7 +141,7 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
 }
 
 // The answer when the search did not end on a plausible set at the noise floor.
-void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, std::vector<std::string>& f) {
+void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double floor_tolerance, std::vector<std::string>& f) {
     const PathStep& last = d.path.back();
     if (!d.tie.empty()) {
         const std::string after = d.path.size() > 1 ? "After " + last.fit.spec.text() + ", " : std::string();
@@ -157,6 +165,7 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, std::ve
                         ? std::string("No missing effect: the residual is at the noise floor and no library effect earns its parameters.") +
                               (d.detection_limits.empty() ? "" : " An effect smaller than this log's detection limit (listed) may still be present.")
                         : std::string("No missing effect can be seen on this data."));
+        if (const std::string rest = structure_at_floor(d.path.front(), floor_tolerance); !rest.empty()) f.push_back(rest);
     }
 }
 
@@ -248,7 +257,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     "is still missing{}.",
                                     c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(), other_missing_effect(d, c.effect)));
     for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
-    unresolved_findings(d, left_by_last_step, f);
+    unresolved_findings(d, left_by_last_step, floor_tolerance, f);
     mechanical_findings(d, floor_tolerance, f);
     if (!d.model_intervals_valid())
         f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",

@@ -424,8 +424,13 @@ Polished polish(const Projection& projection, const SteadyStateModel& model, Pro
 // segments measures that spread, from one pass of per-segment normal equations (each segment left
 // out in turn, one Gauss-Newton step from the fit on all rows). A parameter whose jackknife variance
 // exceeds its model-based one beyond chance ((S - 1) times their ratio against chi-square with S - 1
-// degrees of freedom, p < 0.01) gets the jackknife's interval (t with S - 1 degrees of freedom); a
-// well-specified fit keeps its intervals.
+// degrees of freedom, p < 0.01) gets the jackknife's variance. What it cannot pin down, the
+// parameters that trade against it cannot either: its excess variance is carried to them along the
+// fit's valley (a shift d of the flagged parameters moves the others by C_oF C_FF^-1 d at the least
+// squares optimum, C the model-based covariance), so that a dead-time band the segments disagree on
+// widens the resistance it trades with, although every segment agrees on the resistance given the
+// band. Each widened interval takes t with S - 1 degrees of freedom; a well-specified fit keeps its
+// intervals.
 void widen_for_segment_spread(const SteadyStateModel& model, const Eigen::VectorXd& values, const std::vector<Eigen::Index>& kept,
                               ModelFit& fit) {
     const auto segments = fit.segments.size();
@@ -435,17 +440,38 @@ void widen_for_segment_spread(const SteadyStateModel& model, const Eigen::Vector
     const Eigen::MatrixXd steps = leave_one_range_out_steps(range_normal_equations(model, values, kept, starts));
     const auto p = static_cast<Eigen::Index>(kept.size());
     const double count = static_cast<double>(segments);
-    const Eigen::VectorXd mean = steps.rowwise().mean();
-    const Eigen::VectorXd variance = (count - 1.0) / count * (steps.colwise() - mean).rowwise().squaredNorm();
+    const Eigen::MatrixXd centred = steps.colwise() - steps.rowwise().mean();
+    const Eigen::MatrixXd spread = (count - 1.0) / count * centred * centred.transpose();
+    const Eigen::MatrixXd& covariance = fit.uncertainty.covariance;
     const double chance = boost::math::quantile(boost::math::chi_squared(count - 1.0), 0.99);
     const double critical = boost::math::quantile(boost::math::students_t(count - 1.0), 0.975);
     fit.segment_spread.assign(fit.values.size(), false);
+    std::vector<Eigen::Index> flagged;
+    for (Eigen::Index c = 0; c < p; ++c) {
+        const double model_se = fit.standard_error[kept[static_cast<std::size_t>(c)]];
+        if (!std::isfinite(model_se) || model_se <= 0.0) continue;
+        if ((count - 1.0) * spread(c, c) / (model_se * model_se) > chance) flagged.push_back(c);
+    }
+    if (flagged.empty() || covariance.rows() != p || !covariance.allFinite()) return;
+    const auto f = static_cast<Eigen::Index>(flagged.size());
+    Eigen::MatrixXd own(f, f), excess(f, f), across(p, f);
+    for (Eigen::Index a = 0; a < f; ++a) {
+        for (Eigen::Index b = 0; b < f; ++b) {
+            own(a, b) = covariance(flagged[static_cast<std::size_t>(a)], flagged[static_cast<std::size_t>(b)]);
+            excess(a, b) = spread(flagged[static_cast<std::size_t>(a)], flagged[static_cast<std::size_t>(b)]) - own(a, b);
+        }
+        across.col(a) = covariance.col(flagged[static_cast<std::size_t>(a)]);
+    }
+    // Only the directions in which the segments spread more than the noise would widen anything.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> split(excess);
+    const Eigen::MatrixXd more = split.eigenvectors() * split.eigenvalues().cwiseMax(0.0).asDiagonal() * split.eigenvectors().transpose();
+    const Eigen::MatrixXd carry = across * own.completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::VectorXd extra = (carry * more * carry.transpose()).diagonal();
     for (Eigen::Index c = 0; c < p; ++c) {
         const Eigen::Index j = kept[static_cast<std::size_t>(c)];
         const double model_se = fit.standard_error[j];
-        if (!std::isfinite(model_se) || model_se <= 0.0) continue;
-        if ((count - 1.0) * variance[c] / (model_se * model_se) <= chance) continue;
-        const double se = std::sqrt(variance[c]);
+        if (!std::isfinite(model_se) || model_se <= 0.0 || !(extra[c] > 0.0)) continue;
+        const double se = std::sqrt(model_se * model_se + extra[c]);
         fit.standard_error[j] = se;
         fit.lower[j] = std::min(fit.lower[j], values[j] - critical * se);
         fit.upper[j] = std::max(fit.upper[j], values[j] + critical * se);
