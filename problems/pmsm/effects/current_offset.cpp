@@ -1,6 +1,11 @@
 // Current-sensor offsets on phases a and b (phase c is computed as -a - b, as in most drives). The
 // measured alpha-beta current carries the constant (o_a, (o_a + 2 o_b)/sqrt 3); in the rotating frame
-// that is a ripple at the electrical frequency, which the current loop imposes on the true currents.
+// that is a ripple o at the electrical frequency, which the current loop imposes on the true currents
+// i_m - o. The ripple turns at the electrical speed, so it has an L di/dt the steady state lacks:
+// -L d o/dt = omega L J o, which cancels the ripple's share of j omega L (i_m - o) on an isotropic
+// machine (u = R (i_m - o) + j omega L i_m + j omega psi_f) and leaves omega (L J - J L) o of the
+// saliency. Without it the term claims (R + j omega L) o where the data hold R o: a thousand times
+// too much on a machine whose omega L / R is large.
 #include "problems/pmsm/effects/effect.hpp"
 
 namespace mhb::pmsm {
@@ -16,14 +21,23 @@ public:
 
     Complex plant_current_sensor_offset() const override { return alpha_beta_offset(values()[0], values()[1]); }
 
-    unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::SensorCurrents); }
+    unsigned model_stages() const override { return ModelStage::SensorCurrents | ModelStage::CurrentRipple; }
+    // omega L J o: proportional to L_d and L_q.
+    BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool is_size(std::size_t) const override { return true; }
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
-    void model(ModelStage, const double* p, ModelState& s) const override {
-        // The logged angle is the controller's, the frame the offset was measured in.
+    void model(ModelStage stage, const double* p, ModelState& s) const override {
+        // In the sensor stage the angle is the logged one, the controller's, the frame the offset was
+        // measured in; in the ripple's stage it is the true one, the frame of the voltage equation.
         const Complex o = alpha_beta_offset(p[0], p[1]);
-        s.i_d -= o.real() * s.cos_theta + o.imag() * s.sin_theta;
-        s.i_q -= -o.real() * s.sin_theta + o.imag() * s.cos_theta;
+        if (stage == ModelStage::SensorCurrents) {
+            s.i_d -= o.real() * s.cos_theta + o.imag() * s.sin_theta;
+            s.i_q -= -o.real() * s.sin_theta + o.imag() * s.cos_theta;
+            return;
+        }
+        // omega L J o = omega (-L_d o_q, L_q o_d).
+        s.u_d -= s.omega * s.ld * (-o.real() * s.sin_theta + o.imag() * s.cos_theta);
+        s.u_q += s.omega * s.lq * (o.real() * s.cos_theta + o.imag() * s.sin_theta);
     }
 };
 

@@ -32,6 +32,9 @@ namespace mhb::pmsm {
 //   Coefficients    per-sample resistance and magnet flux (temperatures)
 //   FluxLinkage     flux linkages from currents (after psi_d = Ld i_d + psi_f, psi_q = Lq i_q)
 //   MachineVoltage  extra machine voltage (after u = rs i + j omega psi)
+//   CurrentRipple   L di/dt of a ripple that sensor errors make the true currents carry while the
+//                   logged ones hold still: the steady state's only di/dt (a dynamic model has its own
+//                   and leaves this stage out)
 //   InverterError   what the inverter loses between command and terminals (true frame)
 //   ControllerFrame true rotor frame -> controller frame (voltage)
 //   Delay           applied voltage -> the earlier command that produced it
@@ -46,6 +49,7 @@ enum class ModelStage : unsigned {
     ControllerFrame = 1u << 6,
     Delay = 1u << 7,
     LoggedVoltage = 1u << 8,
+    CurrentRipple = 1u << 9,  // runs right after MachineVoltage
 };
 constexpr unsigned operator|(ModelStage a, ModelStage b) { return static_cast<unsigned>(a) | static_cast<unsigned>(b); }
 constexpr unsigned operator|(unsigned a, ModelStage b) { return a | static_cast<unsigned>(b); }
@@ -70,6 +74,7 @@ struct ModelState {
     Eigen::ArrayXd cos_theta, sin_theta;
     Eigen::ArrayXd omega;               // rad/s electrical
     Eigen::ArrayXd rs, psi_f;           // Ω, Wb per sample
+    double ld = 0.0, lq = 0.0;          // H: the inductances psi_d and psi_q were made with (the base lane's unit ones in a fit's split)
     Eigen::ArrayXd psi_d, psi_q;        // Wb
     Eigen::ArrayXd u_d, u_q;            // V: machine terminal voltage, then command, then logged
     // Logged temperatures (°C), empty when the data have none.

@@ -107,7 +107,7 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
             upper.push_back(spec.maximum);
         }
         stages_ |= e->model_stages();
-        for (unsigned bit = static_cast<unsigned>(ModelStage::Coefficients); bit <= static_cast<unsigned>(ModelStage::LoggedVoltage); bit <<= 1)
+        for (unsigned bit = static_cast<unsigned>(ModelStage::Coefficients); bit <= static_cast<unsigned>(ModelStage::CurrentRipple); bit <<= 1)
             if ((e->model_stages() & bit) != 0 && e->model_base_dependence(static_cast<ModelStage>(bit)) == BaseDependence::Affine)
                 affine_effects_ = true;
     }
@@ -174,13 +174,15 @@ void SteadyStateModel::from_base(const double* p, ModelState& s, bool base_lane)
     s.rs.setConstant(p[0]);
     s.psi_f.setConstant(p[3]);
     run_stage(ModelStage::Coefficients, p, s, base_lane);
+    s.ld = p[1];
+    s.lq = p[2];
     s.psi_d = p[1] * s.i_d + s.psi_f;
     s.psi_q = p[2] * s.i_q;
     run_stage(ModelStage::FluxLinkage, p, s, base_lane);
     s.u_d = s.rs * s.i_d - s.omega * s.psi_q;
     s.u_q = s.rs * s.i_q + s.omega * s.psi_d;
-    for (auto stage : {ModelStage::MachineVoltage, ModelStage::InverterError, ModelStage::ControllerFrame, ModelStage::Delay,
-                       ModelStage::LoggedVoltage})
+    for (auto stage : {ModelStage::MachineVoltage, ModelStage::CurrentRipple, ModelStage::InverterError, ModelStage::ControllerFrame,
+                       ModelStage::Delay, ModelStage::LoggedVoltage})
         run_stage(stage, p, s, base_lane);
 }
 
