@@ -3,6 +3,7 @@
 // pairs and a triple exactly, with no false alarm on clean data.
 #include <catch2/catch.hpp>
 
+#include <tbb/global_control.h>
 #include <toml++/toml.h>
 
 #include "framework/input_error.hpp"
@@ -262,4 +263,24 @@ TEST_CASE("a study on a saturating plant records how far the recommended flux mo
     REQUIRE(clean.records.size() == 1);
     CHECK(std::isnan(clean.records.front().flux_error));
     CHECK_FALSE(study_record_json(clean, clean.records.front()).contains("flux_error"));
+}
+
+TEST_CASE("a drive whose simulation fails stops the study with its case and seed named, also on two threads", "[pmsm][study]") {
+    // The 5 kW machine's iron saturating at 12 A cannot carry its profile's loads: the saturating law
+    // bounds the q flux at L_q I_sat, and a transient asks for more ("no current produces the flux
+    // linkage"). On two threads the clean drives are being diagnosed while it fails; the failure used
+    // to leave the task and cancel their parallel work, which crashed (SIGSEGV) instead of reporting.
+    testing::TemporaryDirectory dir;
+    const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_5kw_profile.toml";
+    const auto file = dir.write("s.toml", study_text(profile, "[[effect]]\nname = \"saturation\"\nclear = { plant.saturation.saturation_current = 12.0 }\n",
+                                                     "[1, 2]"));
+    const auto spec = read_study(file);
+    tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+    try {
+        run_study(spec, study_cases(spec), DiagnosisOptions{});
+        FAIL("the study ran although a drive's simulation failed");
+    } catch (const InputError& e) {
+        CHECK_THAT(e.what(), Catch::Contains("case saturation") && Catch::Contains("simulation failed") &&
+                                 Catch::Contains("no current produces the flux linkage"));
+    }
 }

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <map>
 #include <mutex>
 #include <set>
@@ -491,7 +492,15 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
     }
     std::atomic<std::size_t> done{0};
     std::mutex progress_mutex;
-    tbb::parallel_for(std::size_t{0}, total, [&](std::size_t job) {
+    // A drive that fails (its simulation refuses a setting, say) stops the study with its error. The
+    // error is caught inside the task and rethrown once the loop has finished: an exception leaving a
+    // task would cancel the loop's task group, and with it the parallel algorithms of the diagnoses
+    // still running on other threads, which then return half-done work (a crash, not the message).
+    std::atomic<bool> failed{false};
+    std::mutex failure_mutex;
+    std::exception_ptr failure;
+    std::size_t failed_job = total;
+    auto run_job = [&](std::size_t job) {
         const auto start = std::chrono::steady_clock::now();
         const std::size_t case_index = job / spec.seeds.size();
         const StudyCase& c = run.cases[case_index];
@@ -500,7 +509,13 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         r.seed = spec.seeds[job % spec.seeds.size()];
         const std::string source = fmt::format("{} (case {}, seed {})", profile_of(c).string(), case_name(c), r.seed);
         const DriveSimulation sim = parse_simulation_profile(case_profile(spec, c, r.seed), source, profile_of(c).parent_path());
-        SimulationResult result = simulate(sim);
+        SimulationResult result;
+        try {
+            result = simulate(sim);
+        } catch (const std::runtime_error& e) {  // e.g. a saturating plant asked for a flux no current gives
+            if (dynamic_cast<const InputError*>(&e)) throw;
+            throw InputError(source, 0, "", std::string("simulation failed: ") + e.what());
+        }
         if (!spec.keep_data.empty()) {
             std::string name;
             for (char ch : (c.design.empty() ? "" : c.design + "_") + c.label + "_" + c.magnitude) name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' ? ch : '-';
@@ -566,7 +581,21 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             std::lock_guard lock(progress_mutex);
             progress(finished, total);
         }
+    };
+    tbb::parallel_for(std::size_t{0}, total, [&](std::size_t job) {
+        if (failed) return;  // the study stops at a failed drive; what has not started does not run
+        try {
+            run_job(job);
+        } catch (...) {
+            std::lock_guard lock(failure_mutex);
+            if (job < failed_job) {  // of the drives that failed before the others stopped, the first in the study's order
+                failed_job = job;
+                failure = std::current_exception();
+            }
+            failed = true;
+        }
     });
+    if (failure) std::rethrow_exception(failure);
     return run;
 }
 
