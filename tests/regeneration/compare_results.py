@@ -11,8 +11,9 @@ each job twice.
   tests/regeneration/compare_results.py --mhbench build/mhbench --all      # every committed result
 
 The subset (about half a minute on 2 cores) reruns Table 3, the demo (every optimizer on classic and
-BBOB functions), one case of each detection study and the tutorial's diagnosis; --all reruns every
-experiment and study (about 15 minutes on 2 cores, and about 12 more for results/cec2022, 25 more
+BBOB functions), one case of each detection study (of the 5 kW and 100 kW machines' studies the clean
+drives) and the tutorial's diagnosis; --all reruns every experiment and study (about 15 minutes on
+2 cores before the two machines' studies were added, and about 12 more for results/cec2022, 25 more
 for results/cec2017, 4 for results/cec2022_lshade_code_choices and 50 for results/cec2017_jso_lshade
 as they were measured, docs/test-functions.md and docs/algorithms.md).
 Exit 0 when everything matches, 1 with a list of differences, 2 on bad usage.
@@ -65,7 +66,7 @@ def experiment_jobs():
 def study_jobs(only=None):
     """Each committed study; with `only`, one case of each (a label, or design/label on a study with designs)."""
     jobs = []
-    for name in ("detection_study", "detection_study_averaged", "baldor_study"):
+    for name in ("detection_study", "detection_study_averaged", "baldor_study", "detection_study_5kw", "detection_study_100kw"):
         command = ["study", f"experiments/pmsm/{name}.toml", "--out", "{out}", "--quiet"]
         rows = None
         if only:
@@ -212,7 +213,8 @@ def main():
         # Table 3 (GWO, SOA, ISOA on the PMSM) and the demo (every optimizer on classic and BBOB functions).
         jobs = [j for j in experiment_jobs() if j.name in ("pmsm_table3", "demo")]
         jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal",
-                            "baldor_study": "high_small_quiet/clean"})
+                            "baldor_study": "high_small_quiet/clean", "detection_study_5kw": "clean",
+                            "detection_study_100kw": "clean"})
     jobs += tutorial_jobs(program, scratch)
 
     failed = 0
