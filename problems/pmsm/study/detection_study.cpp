@@ -543,7 +543,9 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             if (stated == c.sizes.end() || stated->second.empty()) continue;
             bool below = true;
             for (const auto& [parameter, size] : stated->second) {
-                const auto limit = std::find_if(r.missed_limits.begin(), r.missed_limits.end(), [&](const auto& l) { return l.parameter == parameter; });
+                // clang 14 (the fuzz and sanitizer builds) cannot capture a structured binding, which C++20 allows:
+                // the lambda captures a reference made from it.
+                const auto limit = std::find_if(r.missed_limits.begin(), r.missed_limits.end(), [&parameter = parameter](const auto& l) { return l.parameter == parameter; });
                 below = below && limit != r.missed_limits.end() && std::abs(size) < limit->limit;
             }
             if (below) r.below_limit.push_back(effect);
