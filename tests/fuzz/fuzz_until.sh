@@ -13,6 +13,7 @@ set -uo pipefail
 fuzzer="$(realpath "$1")" corpus="$2" findings="$3" runs="$4" seconds="$5"
 shift 5
 mkdir -p "$findings"
+stuck_after=${FUZZ_UNTIL_STUCK_AFTER:-30}
 start=$(date +%s)
 total=0
 segment=0
@@ -23,10 +24,33 @@ while [ "$total" -lt "$runs" ]; do
   log="$findings/run-$segment.log"
   # Artifacts go to FINDINGS with the run's number, so that no finding overwrites another.
   "$fuzzer" "$corpus" -runs=$((runs - total)) -max_total_time="$left" -print_final_stats=1 \
-      -artifact_prefix="$findings/run-$segment-" "$@" >"$log" 2>&1
+      -artifact_prefix="$findings/run-$segment-" "$@" >"$log" 2>&1 &
+  pid=$!
+  # A harness built without AddressSanitizer can meet a fault that has already damaged malloc's
+  # own data; libFuzzer's crash handler then allocates, glibc aborts, and the handler waits forever
+  # on a lock it holds (seen on fuzz_hdf5: a global-heap copy in H5HG_read, then "malloc(): invalid
+  # size"), where -timeout no longer fires. Such a process uses no CPU at all: one that has had none
+  # for $stuck_after seconds is killed, and the run counts as a finding.
+  ticks=-1 still=0 stuck=""
+  while kill -0 "$pid" 2>/dev/null; do
+    sleep 5
+    now=$(sed 's/^.*) //' "/proc/$pid/stat" 2>/dev/null | cut -d' ' -f12,13 | tr ' ' +) || break
+    [ -n "$now" ] || break
+    now=$((now))
+    if [ "$now" -eq "$ticks" ]; then still=$((still + 5)); else still=0 ticks=$now; fi
+    if [ "$still" -ge "$stuck_after" ]; then
+      kill -KILL "$pid" 2>/dev/null
+      stuck="stuck without CPU for $still s (a crash handler waiting on itself?), killed"
+      echo "fuzz_until.sh: $stuck" >>"$log"
+    fi
+  done
+  wait "$pid" 2>/dev/null
   executed=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  # A killed run printed no totals: count the inputs of its last status line ("#N ..."), fewer than it ran.
+  [ -z "$executed" ] && executed=$(sed -n 's/^#\([0-9][0-9]*\)[[:space:]].*/\1/p' "$log" | tail -1)
   total=$((total + ${executed:-0}))
   finding=$(grep -m1 -E '^==[0-9]+== ?ERROR' "$log" || true)
+  [ -n "$stuck" ] && finding="${finding:+$finding; }$stuck"
   echo "run $segment: ${executed:-0} inputs, total $total after $(($(date +%s) - start)) s${finding:+; $finding}"
   # A run that ended without a finding and short of its inputs ran out of time; one that executed
   # nothing cannot start (a broken build or corpus): stop rather than loop.
