@@ -14,6 +14,27 @@ fuzzer="$(realpath "$1")" corpus="$2" findings="$3" runs="$4" seconds="$5"
 shift 5
 mkdir -p "$findings"
 stuck_after=${FUZZ_UNTIL_STUCK_AFTER:-30}
+# A harness built without AddressSanitizer can meet a fault that has already damaged malloc's own
+# data; libFuzzer's crash handler then allocates, glibc aborts, and the handler waits forever on a
+# lock it holds (seen on fuzz_hdf5: a global-heap copy in H5HG_read, then "malloc(): invalid size"),
+# where -timeout no longer fires. Such a process uses no CPU at all: one that has had none for
+# $stuck_after seconds is killed, and its run counts as a finding. Beside the harness, so that the
+# loop goes on as soon as the harness ends.
+watch_for_stuck() {
+  local pid="$1" log="$2" ticks=-1 still=0 now
+  while sleep 5; do
+    now=$(sed 's/^.*) //' "/proc/$pid/stat" 2>/dev/null | cut -d' ' -f12,13 | tr ' ' +)
+    [ -n "$now" ] || return
+    now=$((now))
+    if [ "$now" -eq "$ticks" ]; then still=$((still + 5)); else still=0 ticks=$now; fi
+    if [ "$still" -ge "$stuck_after" ]; then
+      echo "fuzz_until.sh: stuck without CPU for $still s (a crash handler waiting on itself?), killed" >>"$log"
+      kill -KILL "$pid" 2>/dev/null
+      return
+    fi
+  done
+}
+
 start=$(date +%s)
 total=0
 segment=0
@@ -26,25 +47,12 @@ while [ "$total" -lt "$runs" ]; do
   "$fuzzer" "$corpus" -runs=$((runs - total)) -max_total_time="$left" -print_final_stats=1 \
       -artifact_prefix="$findings/run-$segment-" "$@" >"$log" 2>&1 &
   pid=$!
-  # A harness built without AddressSanitizer can meet a fault that has already damaged malloc's
-  # own data; libFuzzer's crash handler then allocates, glibc aborts, and the handler waits forever
-  # on a lock it holds (seen on fuzz_hdf5: a global-heap copy in H5HG_read, then "malloc(): invalid
-  # size"), where -timeout no longer fires. Such a process uses no CPU at all: one that has had none
-  # for $stuck_after seconds is killed, and the run counts as a finding.
-  ticks=-1 still=0 stuck=""
-  while kill -0 "$pid" 2>/dev/null; do
-    sleep 5
-    now=$(sed 's/^.*) //' "/proc/$pid/stat" 2>/dev/null | cut -d' ' -f12,13 | tr ' ' +) || break
-    [ -n "$now" ] || break
-    now=$((now))
-    if [ "$now" -eq "$ticks" ]; then still=$((still + 5)); else still=0 ticks=$now; fi
-    if [ "$still" -ge "$stuck_after" ]; then
-      kill -KILL "$pid" 2>/dev/null
-      stuck="stuck without CPU for $still s (a crash handler waiting on itself?), killed"
-      echo "fuzz_until.sh: $stuck" >>"$log"
-    fi
-  done
+  watch_for_stuck "$pid" "$log" >/dev/null 2>&1 &
+  watcher=$!
   wait "$pid" 2>/dev/null
+  kill "$watcher" 2>/dev/null
+  wait "$watcher" 2>/dev/null
+  stuck=$(sed -n 's/^fuzz_until\.sh: //p' "$log" | tail -1)
   executed=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   # A killed run printed no totals: count the inputs of its last status line ("#N ..."), fewer than it ran.
   [ -z "$executed" ] && executed=$(sed -n 's/^#\([0-9][0-9]*\)[[:space:]].*/\1/p' "$log" | tail -1)
