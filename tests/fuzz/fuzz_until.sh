@@ -28,7 +28,8 @@ watch_for_stuck() {
     now=$((now))
     if [ "$now" -eq "$ticks" ]; then still=$((still + 5)); else still=0 ticks=$now; fi
     if [ "$still" -ge "$stuck_after" ]; then
-      echo "fuzz_until.sh: stuck without CPU for $still s (a crash handler waiting on itself?), killed" >>"$log"
+      # On a line of its own: the harness may have stopped in the middle of one.
+      printf '\nfuzz_until.sh: stuck without CPU for %s s (a crash handler waiting on itself?), killed\n' "$still" >>"$log"
       kill -KILL "$pid" 2>/dev/null
       return
     fi
