@@ -58,7 +58,8 @@ while [ "$total" -lt "$runs" ]; do
   # A killed run printed no totals: count the inputs of its last status line ("#N ..."), fewer than it ran.
   [ -z "$executed" ] && executed=$(sed -n 's/^#\([0-9][0-9]*\)[[:space:]].*/\1/p' "$log" | tail -1)
   total=$((total + ${executed:-0}))
-  finding=$(grep -m1 -E '^==[0-9]+== ?ERROR' "$log" || true)
+  # UBSan reports undefined behaviour as "file:line:col: runtime error: ...", with no ==ERROR line.
+  finding=$(grep -m1 -E '^==[0-9]+== ?ERROR|: runtime error: ' "$log" || true)
   [ -n "$stuck" ] && finding="${finding:+$finding; }$stuck"
   echo "run $segment: ${executed:-0} inputs, total $total after $(($(date +%s) - start)) s${finding:+; $finding}"
   # A run that ended without a finding and short of its inputs ran out of time; one that executed
