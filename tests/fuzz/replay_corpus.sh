@@ -35,7 +35,7 @@ while [ "$next" -lt "${#files[@]}" ]; do
   failed=$((failed + 1))
   cp "$last" "$findings/"
   mv "$log" "$findings/$(basename "$last").log"
-  echo "failed: $last ($(grep -m1 -E '^==[0-9]+== ?ERROR' "$findings/$(basename "$last").log" | cut -c1-160))"
+  echo "failed: $last ($(grep -m1 -E '^==[0-9]+== ?ERROR|: runtime error: ' "$findings/$(basename "$last").log" | cut -c1-160))"
   next=$((index[$last] + 1))
 done
 echo "replayed ${#files[@]} inputs ($replayed completed), $failed failed"
