@@ -335,9 +335,14 @@ Hdf5File::Planned Hdf5File::plan(hid_t group, const Link& link, const std::strin
     if (p.kind != Kind::matlab_chars)
         p.rows = p.dims.empty() ? 1 : p.dims.size() == 1 ? p.dims[0] : p.dims[0] * p.dims[1];
     rows.check(p.field, p.rows);
-    if (p.kind == Kind::strings && H5Tis_variable_str(p.type.get()) <= 0 && H5Tget_size(p.type.get()) > max_label_bytes)
-        refuse(p.field, fmt::format("fixed-length strings of {} bytes; mhbench reads labels of at most {} bytes", H5Tget_size(p.type.get()),
-                                    max_label_bytes));
+    if (p.kind == Kind::strings && H5Tis_variable_str(p.type.get()) <= 0) {
+        // 0 is also the library's answer for a type it cannot read; read_strings divides by the
+        // width (fuzz_hdf5: a division by zero there).
+        const std::size_t width = H5Tget_size(p.type.get());
+        if (width == 0) refuse(p.field, "fixed-length strings of 0 bytes (the file is damaged)");
+        if (width > max_label_bytes)
+            refuse(p.field, fmt::format("fixed-length strings of {} bytes; mhbench reads labels of at most {} bytes", width, max_label_bytes));
+    }
     if (compact) check_compact_size(dataset, p.space.get(), p.type.get(), p.field);
     // A dataset whose storage was never (fully) written reads as its fill value: zeros that the
     // file never held. Compact and contiguous storage is allocated whole or not at all.
