@@ -150,7 +150,7 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
     const Eigen::Index n = s.size();
     s.i_d = data_.i_d.segment(first, n).array();
     s.i_q = data_.i_q.segment(first, n).array();
-    s.omega = data_.omega_e.segment(first, n).array();
+    s.omega = (speed_ ? *speed_ : data_.omega_e).segment(first, n).array();
     if (data_.theta_e) {
         s.theta = data_.theta_e->segment(first, n).array();
         s.cos_theta = angle_->cos.segment(first, n);

@@ -55,6 +55,10 @@ public:
     SteadyStateModel& operator=(const SteadyStateModel&) = delete;
 
     const Measurement& data() const { return data_; }
+    // Evaluates the model at these speeds instead of the logged omega_e (one per row; nullptr: the
+    // logged ones). The dynamic model predicts a step at the speed over the step, not at its first row.
+    // `speed` must outlive the model.
+    void set_speed(const Eigen::VectorXd* speed) { speed_ = speed; }
     const std::vector<std::unique_ptr<Effect>>& effects() const { return effects_; }
     Eigen::Index parameter_count() const { return static_cast<Eigen::Index>(names_.size()); }
     // "Rs", "Ld", "Lq", "psi_f", then "<effect>.<parameter>".
@@ -115,6 +119,7 @@ private:
 
     std::optional<Measurement> owned_;
     const Measurement& data_;
+    const Eigen::VectorXd* speed_ = nullptr;  // set_speed
     // cos and sin of the logged angle, computed once and shared by the models of the same data that
     // exist at the same time: a diagnosis makes tens of models of one log, several at once.
     struct AngleTable;
