@@ -113,6 +113,28 @@ DynamicFit fit_dynamic_model(const Measurement& data, const ModelSpec& spec, boo
     } else {
         fit.start = dynamic_start(model, model.has_delay() ? model.parameters_of(MotorParameters{})[model.delay_index()] : 0.0);
     }
+    // The equation-error inductances are shrunk by the current noise in the differences, by as much as
+    // the log is steady (7 times on 2000 rows of the servo with 1 mA of noise and one step): the start
+    // takes the best of them times 1, 2, 4, ... 64 by the prediction error on the first rows, so that
+    // the fit does not begin in the basin of a machine whose currents follow their voltage at once.
+    {
+        Eigen::VectorXd best_start = fit.start;
+        double best = std::numeric_limits<double>::infinity();
+        for (double factor = 1.0; factor <= 64.0; factor *= 2.0) {
+            Eigen::VectorXd candidate = fit.start;
+            for (int j = 1; j <= 2; ++j)
+                if (fit.free[static_cast<std::size_t>(j)]) candidate[j] = std::min(candidate[j] * factor, model.bounds().upper[j]);
+            model.set_memory(time_constant_of(candidate));
+            model.use_subset(scan_rows);
+            const double rss = model.residual_sums(candidate).sum();
+            if (rss < best) {
+                best = rss;
+                best_start = candidate;
+            }
+        }
+        fit.start = best_start;
+        model.use_subset(0);
+    }
 
     std::vector<Eigen::Index> columns;
     for (Eigen::Index j = 0; j < model.parameter_count(); ++j)
