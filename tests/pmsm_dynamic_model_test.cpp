@@ -13,6 +13,8 @@
 #include "problems/pmsm/fit/dynamic_fit.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/simulation/drive_simulator.hpp"
+#include "tests/mhbench_cli.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb::pmsm;
 
@@ -173,4 +175,28 @@ TEST_CASE("The dynamic model refuses a time column it cannot use, naming the row
         CHECK(choice.kind == ModelKind::Dynamic);
     }
 }
+
+TEST_CASE("fit --model-kind: dynamic, auto, and exit 2 on a log it cannot use", "[pmsm][dynamic][cli]") {
+    const mhb::testing::TemporaryDirectory dir;
+    auto data = simulate(raw_servo()).data;
+    const auto raw = dir.path() / "raw.csv";
+    write_measurement(raw, data);
+    auto run = mhb::testing::run_mhbench("fit --data " + raw.string() + " --model-kind auto", dir.path() / "cli.log");
+    INFO(run.output);
+    CHECK(run.exit_code == 0);
+    CHECK(run.output.find("model kind: dynamic:") != std::string::npos);
+    CHECK(run.output.find("(dynamic)") != std::string::npos);
+
+    (*data.t)[7] = (*data.t)[5];
+    const auto bad = dir.path() / "bad.csv";
+    write_measurement(bad, data);
+    run = mhb::testing::run_mhbench("fit --data " + bad.string() + " --model-kind dynamic", dir.path() / "cli.log");
+    CHECK(run.exit_code == 2);
+    CHECK(run.output.find("bad.csv: t: data row 8") != std::string::npos);
+    run = mhb::testing::run_mhbench("fit --data " + bad.string() + " --model-kind auto", dir.path() / "cli.log");
+    CHECK(run.exit_code == 0);
+    CHECK(run.output.find("model kind: steady: data row 8") != std::string::npos);
+}
+
+
 

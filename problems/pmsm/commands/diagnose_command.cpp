@@ -11,6 +11,7 @@
 #include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
+#include "problems/pmsm/fit/dynamic_fit.hpp"
 #include "problems/pmsm/report/diagnosis_report.hpp"
 
 namespace mhb::cli {
@@ -32,6 +33,19 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
+        // The diagnosis compares many fits of the steady model; the dynamic model is fitted by `fit` only
+        // so far, so `auto` states its choice and falls back.
+        const auto kind = pmsm::parse_model_kind(o->model_kind);
+        if (kind == pmsm::ModelKind::Dynamic)
+            throw InputError("command line", 0, "--model-kind",
+                             "diagnose has only the steady model so far; the dynamic model is fitted by `mhbench fit --model-kind dynamic`");
+        if (kind == pmsm::ModelKind::Auto) {
+            const auto choice = pmsm::choose_model_kind(data, spec);
+            fmt::print("model kind: steady ({}{})\n\n", choice.kind == pmsm::ModelKind::Dynamic ? "auto would choose " : "auto: ",
+                       choice.kind == pmsm::ModelKind::Dynamic
+                           ? choice.reason + "; but diagnose has only the steady model so far, so it falls back to it"
+                           : choice.reason.substr(std::string("steady: ").size()));
+        }
         const auto found = find_operating_points_option(*o, data);
         pmsm::DiagnosisOptions options;
         options.fit = fit_options(*o);

@@ -11,6 +11,7 @@
 #include "framework/file_output.hpp"
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
+#include "problems/pmsm/fit/dynamic_fit.hpp"
 #include "problems/pmsm/report/fit_report.hpp"
 
 namespace mhb::cli {
@@ -26,6 +27,24 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
+        auto kind = pmsm::parse_model_kind(o->model_kind);
+        if (kind == pmsm::ModelKind::Auto) {
+            const auto choice = pmsm::choose_model_kind(data, spec);
+            fmt::print("model kind: {}\n\n", choice.reason);
+            kind = choice.kind;
+        }
+        if (kind == pmsm::ModelKind::Dynamic) {
+            // Every row: the transients are what the dynamic model learns from.
+            const auto fit = pmsm::fit_dynamic_model(data, spec);
+            fmt::print("{}", pmsm::dynamic_fit_text(fit, data));
+            if (!o->json.empty()) {
+                auto out = pmsm::dynamic_fit_json(fit);
+                out["data"] = o->data;
+                replace_file(o->json, out.dump(2) + "\n");
+                fmt::print("\nJSON: {}\n", o->json);
+            }
+            return exit_ok;
+        }
         const auto found = find_operating_points_option(*o, data);
         const auto fit = pmsm::fit_model(data, spec, fit_options(*o));
         fmt::print("{}", pmsm::fit_text(fit, data));

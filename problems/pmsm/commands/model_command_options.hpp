@@ -26,6 +26,7 @@ inline constexpr std::int64_t max_fit_evaluations = 10'000'000;
 
 struct ModelCommandOptions {
     std::string data, model = "base", json, optimizer = "cmaes";
+    std::string model_kind = "steady";
     std::string columns, columns_file;
     int pole_pairs = 0;
     double settle = 0.0;
@@ -66,6 +67,10 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
     cmd->add_option("--steady-false-alarm", o.steady.false_alarm,
                     "log without a segment column: probability of a false change in a log without any")
         ->check(number_in(1e-12, 0.5));
+    cmd->add_option("--model-kind", o.model_kind,
+                    "steady (di/dt = 0, the default), dynamic (one-step-ahead current prediction on a raw log sampled without gaps) "
+                    "or auto (dynamic when the log holds transients its sampling resolves; says which and why)")
+        ->check(CLI::IsMember({"steady", "dynamic", "auto"}));
     cmd->add_option("--json", o.json, json_help);
 }
 
