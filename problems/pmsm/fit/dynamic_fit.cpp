@@ -92,48 +92,42 @@ DynamicFit fit_dynamic_model(const Measurement& data, const ModelSpec& spec, boo
     fit.free = model.free();
     fit.steps = model.steps();
     fit.time_step = model.time_step();
-    // A delay is started from the best of a scan over it at quarter steps, on the first rows: the
-    // prediction error has a narrow valley at the true delay (steps of the input arrive in the wrong
-    // sample elsewhere), which a start at the effect's typical value can miss.
-    const Eigen::Index scan_rows = 20000;
-    if (model.has_delay() && fit.free[static_cast<std::size_t>(model.delay_index())]) {
-        const Eigen::Index j = model.delay_index();
-        double best = std::numeric_limits<double>::infinity();
-        for (double tau = model.bounds().lower[j]; tau <= model.bounds().upper[j] + 1e-15; tau += 0.25 * model.time_step()) {
-            Eigen::VectorXd candidate = dynamic_start(model, tau, scan_rows);
-            model.set_memory(time_constant_of(candidate));
-            model.use_subset(scan_rows);
-            const double rss = model.residual_sums(candidate).sum();
-            if (rss < best) {
-                best = rss;
-                fit.start = candidate;
-            }
-        }
-        fit.start = dynamic_start(model, fit.start[j]);
-    } else {
-        fit.start = dynamic_start(model, model.has_delay() ? model.parameters_of(MotorParameters{})[model.delay_index()] : 0.0);
-    }
-    // The equation-error inductances are shrunk by the current noise in the differences, by as much as
-    // the log is steady (7 times on 2000 rows of the servo with 1 mA of noise and one step): the start
-    // takes the best of them times 1, 2, 4, ... 64 by the prediction error on the first rows, so that
-    // the fit does not begin in the basin of a machine whose currents follow their voltage at once.
+    // The start: the equation-error estimate, whose inductances are shrunk by the current noise in the
+    // differences by as much as the log is steady (7 times on 2000 rows of the servo with 1 mA of noise
+    // and one step), taken times 1, 2, 4, ... 64, and a free delay scanned at quarter steps over its
+    // range (the prediction error has a narrow valley at the true delay, where the input's steps arrive
+    // in the right sample); the best by the prediction error on about the first scan_steps steps, so
+    // that the fit does not begin in the basin of a machine whose currents follow their voltage at once.
+    const Eigen::Index scan_steps = 5000;
     {
-        Eigen::VectorXd best_start = fit.start;
-        double best = std::numeric_limits<double>::infinity();
-        for (double factor = 1.0; factor <= 64.0; factor *= 2.0) {
-            Eigen::VectorXd candidate = fit.start;
-            for (int j = 1; j <= 2; ++j)
-                if (fit.free[static_cast<std::size_t>(j)]) candidate[j] = std::min(candidate[j] * factor, model.bounds().upper[j]);
-            model.set_memory(time_constant_of(candidate));
-            model.use_subset(scan_rows);
-            const double rss = model.residual_sums(candidate).sum();
-            if (rss < best) {
-                best = rss;
-                best_start = candidate;
+        std::vector<double> delays{model.has_delay() ? model.parameters_of(MotorParameters{})[model.delay_index()] : 0.0};
+        if (model.has_delay() && fit.free[static_cast<std::size_t>(model.delay_index())]) {
+            delays.clear();
+            const Eigen::Index j = model.delay_index();
+            for (double tau = model.bounds().lower[j]; tau <= model.bounds().upper[j] + 1e-15; tau += 0.25 * model.time_step())
+                delays.push_back(tau);
+        }
+        double best = std::numeric_limits<double>::infinity(), best_delay = delays.front(), best_factor = 1.0;
+        for (const double tau : delays) {
+            const Eigen::VectorXd estimate = dynamic_start(model, tau, scan_steps);
+            for (double factor = 1.0; factor <= 64.0; factor *= 2.0) {
+                Eigen::VectorXd candidate = estimate;
+                for (int j = 1; j <= 2; ++j)
+                    if (fit.free[static_cast<std::size_t>(j)]) candidate[j] = std::min(candidate[j] * factor, model.bounds().upper[j]);
+                model.set_memory(time_constant_of(candidate));
+                model.use_subset(scan_steps);
+                const double rss = model.residual_sums(candidate).sum();
+                if (rss < best) {
+                    best = rss;
+                    best_delay = tau;
+                    best_factor = factor;
+                }
             }
         }
-        fit.start = best_start;
         model.use_subset(0);
+        fit.start = dynamic_start(model, best_delay);
+        for (int j = 1; j <= 2; ++j)
+            if (fit.free[static_cast<std::size_t>(j)]) fit.start[j] = std::min(fit.start[j] * best_factor, model.bounds().upper[j]);
     }
 
     std::vector<Eigen::Index> columns;
@@ -151,8 +145,20 @@ DynamicFit fit_dynamic_model(const Measurement& data, const ModelSpec& spec, boo
         double rss = equations.rss[0] + equations.rss[1];
         double lambda = 1e-4;
         for (int iteration = 0; iteration < 100; ++iteration) {
-            const Eigen::MatrixXd h = equations.gram[0] + equations.gram[1];
-            const Eigen::VectorXd g = equations.moment[0] + equations.moment[1];
+            const Eigen::MatrixXd h_all = equations.gram[0] + equations.gram[1];
+            const Eigen::VectorXd g_all = equations.moment[0] + equations.moment[1];
+            // A parameter at a bound of its range that the gradient pushes outward is held this
+            // iteration (a delay of zero at its lower bound): it would stop every step.
+            std::vector<Eigen::Index> moving;
+            for (Eigen::Index c = 0; c < p; ++c) {
+                const Eigen::Index j = columns[static_cast<std::size_t>(c)];
+                const bool held = (x[j] <= box.lower[j] && g_all[c] > 0.0) || (x[j] >= box.upper[j] && g_all[c] < 0.0);
+                if (!held) moving.push_back(c);
+            }
+            const auto m = static_cast<Eigen::Index>(moving.size());
+            if (m == 0) break;
+            const Eigen::MatrixXd h = h_all(moving, moving);
+            const Eigen::VectorXd g = g_all(moving);
             const Eigen::VectorXd d = h.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
             const Eigen::MatrixXd scaled = d.asDiagonal() * h * d.asDiagonal();
             // Done when the Gauss-Newton step would gain less than 1e-4 of the noise variance (the
@@ -162,14 +168,14 @@ DynamicFit fit_dynamic_model(const Measurement& data, const ModelSpec& spec, boo
             if (predicted < 1e-4 * rss / static_cast<double>(std::max<Eigen::Index>(1, 2 * equations.steps))) break;
             bool improved = false;
             double gain = 0.0;
-            for (int attempt = 0; attempt < 30 && !improved; ++attempt) {
+            for (int attempt = 0; attempt < 12 && !improved; ++attempt) {
                 Eigen::MatrixXd damped = scaled;
                 damped.diagonal().array() += lambda;
                 const Eigen::VectorXd step = -(d.asDiagonal() * damped.ldlt().solve(d.asDiagonal() * g)).eval();
                 Eigen::VectorXd trial = x;
-                for (Eigen::Index c = 0; c < p; ++c) {
-                    const Eigen::Index j = columns[static_cast<std::size_t>(c)];
-                    trial[j] = std::clamp(x[j] + step[c], box.lower[j], box.upper[j]);
+                for (Eigen::Index k = 0; k < m; ++k) {
+                    const Eigen::Index j = columns[static_cast<std::size_t>(moving[static_cast<std::size_t>(k)])];
+                    trial[j] = std::clamp(x[j] + step[k], box.lower[j], box.upper[j]);
                 }
                 const double trial_rss = model.residual_sums(trial).sum();
                 if (trial_rss < rss) {

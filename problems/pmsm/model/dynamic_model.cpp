@@ -107,10 +107,9 @@ std::string dynamic_model_unsupported(const Effect& effect) {
 namespace {
 
 // Which effect of the spec is the delay: the one acting in the Delay stage (-1: none).
-int delay_effect_of(const ModelSpec& spec, const std::vector<std::unique_ptr<Effect>>& effects) {
+int delay_effect_of(const std::vector<std::unique_ptr<Effect>>& effects) {
     for (std::size_t k = 0; k < effects.size(); ++k)
         if (acts_in(effects[k]->model_stages(), ModelStage::Delay)) return static_cast<int>(k);
-    (void)spec;
     return -1;
 }
 
@@ -143,7 +142,7 @@ DynamicModel::DynamicModel(const Measurement& data, const ModelSpec& spec)
         const std::string why = dynamic_model_unsupported(*e);
         if (!why.empty()) throw InputError("--model", 0, e->name(), why + "; fit it with --model-kind steady");
     }
-    const int delay = delay_effect_of(spec, effects);
+    const int delay = delay_effect_of(effects);
     ModelSpec inner = spec;
     std::unique_ptr<Effect> delay_effect;
     if (delay >= 0) {
@@ -386,8 +385,11 @@ void DynamicModel::block(const Eigen::VectorXd& p, const std::vector<Eigen::Inde
                 const Eigen::Index c = effect_columns[e];
                 const AffinePrediction& m = scratch.moved[e];
                 const Eigen::VectorXd& q = moved_parameters[e];
-                const StepInput moved_in = has_delay() && columns[static_cast<std::size_t>(c)] == delay_ ? input_of(k, q[delay_]) : in;
-                direct.col(c) = (step(moved_in, g, affine_voltage(m, s, q.data()), current(m, s), x) - next) /
+                // A moved delay moves the step's split, and so its gains.
+                const bool delay = has_delay() && columns[static_cast<std::size_t>(c)] == delay_;
+                const StepInput moved_in = delay ? input_of(k, q[delay_]) : in;
+                const StepGains moved_gains = delay ? step_gains(moved_in, base[0], base[1], base[2]) : g;
+                direct.col(c) = (step(moved_in, moved_gains, affine_voltage(m, s, q.data()), current(m, s), x) - next) /
                                 moved_step[static_cast<std::size_t>(c)];
             }
             sensitivity = (direct + g.phi * sensitivity).eval();
