@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
+#include <numeric>
 #include <string>
 
 #include <Eigen/LU>
@@ -167,6 +168,12 @@ TEST_CASE("The dynamic model refuses a time column it cannot use, naming the row
     SECTION("no time column") {
         data.t.reset();
         CHECK_THROWS_WITH(fit_dynamic_model(data, spec), Catch::Contains("needs the time column t"));
+    }
+    SECTION("too few rows") {
+        std::vector<Eigen::Index> first_rows(15);
+        std::iota(first_rows.begin(), first_rows.end(), Eigen::Index{0});
+        const Measurement few = select_rows(data, first_rows);
+        CHECK_THROWS_WITH(fit_dynamic_model(few, parse_model_spec("base+delay")), Catch::Contains("the dynamic model needs at least 20"));
     }
     SECTION("an effect the dynamic model does not have") {
         CHECK_THROWS_WITH(fit_dynamic_model(data, parse_model_spec("base+saturation")), Catch::Contains("--model-kind steady"));

@@ -113,10 +113,8 @@ int delay_effect_of(const std::vector<std::unique_ptr<Effect>>& effects) {
     return -1;
 }
 
-}  // namespace
-
-namespace {
 std::atomic<std::uint64_t> next_model_id{1};
+
 }  // namespace
 
 Eigen::VectorXd step_speeds(const Measurement& data) {
@@ -172,6 +170,13 @@ DynamicModel::DynamicModel(const Measurement& data, const ModelSpec& spec)
         history_ = static_cast<Eigen::Index>(std::ceil(tau->maximum / grid_.step)) + 1;
         delay_start_ = delay_effect->values()[0];
     }
+    // A handful of steps cannot tell five parameters apart; a log that short is a mistake.
+    constexpr Eigen::Index fewest_steps = 20;
+    if (steps() < fewest_steps)
+        throw InputError(data.source, 0, "t",
+                         fmt::format("{} rows give {} steps to predict{}; the dynamic model needs at least {}", data.size(), steps(),
+                                     has_delay() ? fmt::format(" after the {} rows a delay of up to {:g} s reads", history_, bounds_.upper[delay_]) : "",
+                                     fewest_steps));
 }
 
 Eigen::VectorXd DynamicModel::parameters_of(const MotorParameters& motor) const {
