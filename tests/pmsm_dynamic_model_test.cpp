@@ -210,8 +210,8 @@ TEST_CASE("fit --model-kind: dynamic, auto, and exit 2 on a log it cannot use", 
 
 
 
-// rs_thermal is not here: on the averaged plant with a rising winding temperature the raw log leaves
-// 1-2.5 mA of prediction error at each segment change, not traced (docs/pmsm.md, "The dynamic model").
+// rs_thermal is not here: on the averaged plant it leaves 1-4 mA of prediction error at some segment
+// changes, not traced (docs/pmsm.md, "The dynamic model").
 TEST_CASE("The dynamic model takes each effect's term from the steady-state model", "[pmsm][dynamic]") {
     struct Case {
         std::string effect;
