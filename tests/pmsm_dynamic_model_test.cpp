@@ -202,6 +202,16 @@ TEST_CASE("fit --model-kind: dynamic, auto, and exit 2 on a log it cannot use", 
     run = mhb::testing::run_mhbench("fit --data " + bad.string() + " --model-kind dynamic", dir.path() / "cli.log");
     CHECK(run.exit_code == 2);
     CHECK(run.output.find("bad.csv: t: data row 8") != std::string::npos);
+    // A raw log with its segment column, less --settle after each segment start: gaps whose rows are not the file's.
+    auto labelled = simulate(raw_servo()).data;
+    labelled.segment_labels = {"a", "b"};
+    labelled.segment = Eigen::VectorXi::Zero(labelled.size());
+    labelled.segment.tail(labelled.size() / 2).setOnes();
+    const auto with_segments = dir.path() / "segments.csv";
+    write_measurement(with_segments, labelled);
+    run = mhb::testing::run_mhbench("fit --data " + with_segments.string() + " --model-kind dynamic --settle 0.01", dir.path() / "cli.log");
+    CHECK(run.exit_code == 2);
+    CHECK(run.output.find("--settle: the dynamic model uses every row") != std::string::npos);
     run = mhb::testing::run_mhbench("fit --data " + bad.string() + " --model-kind auto", dir.path() / "cli.log");
     CHECK(run.exit_code == 0);
     CHECK(run.output.find("model kind: steady: data row 8") != std::string::npos);

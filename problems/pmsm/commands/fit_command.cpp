@@ -34,7 +34,11 @@ const bool registered = register_command("fit", [](CLI::App& app) {
             kind = choice.kind;
         }
         if (kind == pmsm::ModelKind::Dynamic) {
-            // Every row: the transients are what the dynamic model learns from.
+            // Every row: the transients are what the dynamic model learns from, and rows dropped by
+            // --settle would leave gaps whose row numbers are not the file's.
+            if (o->settle > 0.0)
+                throw InputError("command line", 0, "--settle",
+                                 "the dynamic model uses every row, the settling included; leave --settle out with --model-kind dynamic");
             const auto fit = pmsm::fit_dynamic_model(data, spec);
             fmt::print("{}", pmsm::dynamic_fit_text(fit, data));
             if (!o->json.empty()) {
