@@ -148,6 +148,8 @@ DynamicModel::DynamicModel(const Measurement& data, const ModelSpec& spec)
         delay_effect = std::move(effects[static_cast<std::size_t>(delay)]);
     }
     steady_ = make_model(inner, data);
+    // The predictor integrates L di/dt of the true current itself, the offset's ripple included.
+    steady_->leave_out(ModelStage::CurrentRipple);
     step_speed_ = step_speeds(data);
     steady_->set_speed(&step_speed_);
     steady_count_ = steady_->parameter_count();

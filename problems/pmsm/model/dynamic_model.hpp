@@ -4,8 +4,10 @@
 // model at each step's speed (step_speeds; docs/pmsm.md, "The dynamic model").
 //
 // The effects state their term once, in the steady-state model: at the logged currents i_k, the
-// steady-state model of the same effects (without the delay) predicts the voltage f(i_k) the machine
-// needs when the currents do not change, every effect contributing through its stages. What the
+// steady-state model of the same effects (without the delay, and without the stage that stands in
+// for the L di/dt of a ripple the sensors' errors put on the true currents) predicts the voltage
+// f(i_k) the machine needs when the currents do not change, every effect contributing through its
+// stages. What the
 // inverter applies beyond f drives the currents through the inductance:
 //   L di/dt = u(t) - f(i),   f(i) ~ f(i_k) + (R_s + omega J L)(i - i_k) over the step,
 //   i_{k+1} = i_k + Gamma_k (u_k - f(i_k)),   Gamma_k = dt phi1(A_k dt) L^-1,   A_k = -L^-1 (R_s + omega_k J L),

@@ -59,6 +59,9 @@ public:
     // logged ones). The dynamic model predicts a step at the speed over the step, not at its first row.
     // `speed` must outlive the model.
     void set_speed(const Eigen::VectorXd* speed) { speed_ = speed; }
+    // Runs no effect at this stage: the dynamic model has its own L di/dt, so it leaves out the
+    // steady state's stand-in for a ripple's (ModelStage::CurrentRipple).
+    void leave_out(ModelStage stage) { stages_ &= ~static_cast<unsigned>(stage); }
     const std::vector<std::unique_ptr<Effect>>& effects() const { return effects_; }
     Eigen::Index parameter_count() const { return static_cast<Eigen::Index>(names_.size()); }
     // "Rs", "Ld", "Lq", "psi_f", then "<effect>.<parameter>".
