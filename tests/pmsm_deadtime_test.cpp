@@ -56,3 +56,14 @@ TEST_CASE("a fit holding dead time states its pulse-shift bias per microsecond",
     fit.spec = parse_model_spec("base+voltage_offset");
     CHECK(fit.unseen_biases().empty());
 }
+
+TEST_CASE("the band's upper end says which end binds: the log's fraction or the declared range", "[pmsm][deadtime]") {
+    auto effect = make_effect("deadtime");
+    // The servo's 0.33 A: 0.2 of it ends the plausible range, a band that wide is a resistance.
+    effect->set_scale({0.33, 0.05});
+    CHECK(effect->range_end_meaning(1, true).find("acts as a resistance") != std::string::npos);
+    // A traction machine's 360 A: the declared 10 A ends first, below the PWM ripple it may have.
+    effect->set_scale({360.0, 0.1});
+    CHECK(effect->range_end_meaning(1, true).find("declared range ends at 10 A") != std::string::npos);
+    CHECK(effect->range_end_meaning(0, true).empty());
+}

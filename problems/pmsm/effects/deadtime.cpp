@@ -61,10 +61,16 @@ public:
         if (k == 1) hi = std::min(hi, max_band_fraction * scale().current);
     }
     std::string range_end_meaning(std::size_t k, bool upper) const override {
-        if (k == 1 && upper)
-            return fmt::format("a band this wide ({:g} of the largest logged current) acts as a resistance: it is confounded with Rs",
-                               max_band_fraction);
-        return {};
+        if (k != 1 || !upper) return {};
+        // On a large machine the declared range ends first, and the PWM ripple the band stands for
+        // (V_dc T / L) may be wider than it: that end is the law's, not a resistance.
+        const double declared = parameter_specs()[1].maximum;
+        if (max_band_fraction * scale().current >= declared)
+            return fmt::format("the band's declared range ends at {:g} A, less than {:g} of the largest logged current: the PWM ripple "
+                               "of a machine this large may be wider, and the law cannot follow it",
+                               declared, max_band_fraction);
+        return fmt::format("a band this wide ({:g} of the largest logged current) acts as a resistance: it is confounded with Rs",
+                           max_band_fraction);
     }
     // Each turn-on edge comes t_d late whatever the current's sign, so every pulse's centre moves by
     // t_d / 2 and the current sampled at the carrier peak is its period average plus t_d / 2 of
