@@ -15,7 +15,8 @@
 // 7: Effect gained law_accuracy (a virtual: the error its law is known to leave on real machines).
 // 8: Effect gained unseen_bias (a virtual: what it does to the base parameters that no log shows).
 // 9: ModelState gained ld and lq (the inductances of the present run, for terms proportional to them).
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 9
+// 10: Effect's narrow_range became plausible_range, which may reach beyond the declared range.
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 10
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

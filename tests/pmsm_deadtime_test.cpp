@@ -57,13 +57,20 @@ TEST_CASE("a fit holding dead time states its pulse-shift bias per microsecond",
     CHECK(fit.unseen_biases().empty());
 }
 
-TEST_CASE("the band's upper end says which end binds: the log's fraction or the declared range", "[pmsm][deadtime]") {
+TEST_CASE("the band's plausible range is the log's fraction on both sides of the declared range", "[pmsm][deadtime]") {
     auto effect = make_effect("deadtime");
+    const auto& declared = effect->parameter_specs()[1];
     // The servo's 0.33 A: 0.2 of it ends the plausible range, a band that wide is a resistance.
     effect->set_scale({0.33, 0.05});
+    double lo = declared.minimum, hi = declared.maximum;
+    effect->plausible_range(1, lo, hi);
+    CHECK(hi == Approx(0.066));
     CHECK(effect->range_end_meaning(1, true).find("acts as a resistance") != std::string::npos);
-    // A traction machine's 360 A: the declared 10 A ends first, below the PWM ripple it may have.
+    // A traction machine's 360 A, whose PWM ripple alone is 6-14 A: 72 A, beyond the declared 10 A.
     effect->set_scale({360.0, 0.1});
-    CHECK(effect->range_end_meaning(1, true).find("declared range ends at 10 A") != std::string::npos);
+    lo = declared.minimum, hi = declared.maximum;
+    effect->plausible_range(1, lo, hi);
+    CHECK(hi == Approx(72.0));
+    CHECK(declared.maximum < hi);
     CHECK(effect->range_end_meaning(0, true).empty());
 }

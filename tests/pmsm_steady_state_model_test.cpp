@@ -136,6 +136,28 @@ TEST_CASE("an effect that does not state its dependence on the base parameters i
     for (int draw = 0; draw < 3; ++draw) check_split(model, random_values(model, rng));
 }
 
+TEST_CASE("the search box holds the plausible range, stretched where it reaches beyond the declared one", "[pmsm][steady_state_model]") {
+    const Measurement& servo = diagnosis_data({});
+    const double largest = std::sqrt((servo.i_d.array().square() + servo.i_q.array().square()).maxCoeff());
+    const auto small = make_model(parse_model_spec("base+deadtime"), servo);
+    const Eigen::Index band = 5;
+    REQUIRE(small->parameter_names()[band] == "deadtime.current_band");
+    // The servo's band: plausible to 0.2 of its largest current, searched over the declared 10 A.
+    CHECK(small->plausible().upper[band] == Approx(0.2 * largest));
+    CHECK(small->bounds().upper[band] == 10.0);
+    // The same log at a thousand times the current: 0.2 of it is beyond the declared 10 A, so the
+    // box stretches to twice the plausible end and a fit can still land beyond it.
+    Measurement large = servo;
+    large.i_d *= 1000.0;
+    large.i_q *= 1000.0;
+    const auto traction = make_model(parse_model_spec("base+deadtime"), large);
+    CHECK(traction->plausible().upper[band] == Approx(200.0 * largest));
+    CHECK(traction->bounds().upper[band] == Approx(400.0 * largest));
+    CHECK(traction->bounds().lower[band] == 0.0);
+    // A parameter whose plausible range stays inside the declared one keeps the declared box.
+    CHECK(traction->bounds().upper[4] == small->bounds().upper[4]);
+}
+
 TEST_CASE("predictions and fits are the same numbers on one thread and on several", "[pmsm][steady_state_model]") {
     const Measurement& data = diagnosis_data({{"deadtime", {}}, {"flux_harmonic", {}}});
     const auto spec = parse_model_spec("base+deadtime+flux_harmonic");

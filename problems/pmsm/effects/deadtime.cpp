@@ -56,19 +56,14 @@ public:
 
     // A band over a large part of the logged current makes the loss proportional to the current: a
     // resistance, which R_s already is. The band's physical causes (ripple, snubber charge) are a
-    // small fraction of the current the inverter is rated for.
-    void narrow_range(std::size_t k, double&, double& hi) const override {
-        if (k == 1) hi = std::min(hi, max_band_fraction * scale().current);
+    // small fraction of the current the inverter is rated for, whatever its size: on a traction
+    // machine the PWM ripple (V_dc T / L) alone is 6-14 A, beyond the declared 10 A, so the log's
+    // fraction sets the end on both sides of the declaration.
+    void plausible_range(std::size_t k, double&, double& hi) const override {
+        if (k == 1) hi = max_band_fraction * scale().current;
     }
     std::string range_end_meaning(std::size_t k, bool upper) const override {
         if (k != 1 || !upper) return {};
-        // On a large machine the declared range ends first, and the PWM ripple the band stands for
-        // (V_dc T / L) may be wider than it: that end is the law's, not a resistance.
-        const double declared = parameter_specs()[1].maximum;
-        if (max_band_fraction * scale().current >= declared)
-            return fmt::format("the band's declared range ends at {:g} A, less than {:g} of the largest logged current: the PWM ripple "
-                               "of a machine this large may be wider, and the law cannot follow it",
-                               declared, max_band_fraction);
         return fmt::format("a band this wide ({:g} of the largest logged current) acts as a resistance: it is confounded with Rs",
                            max_band_fraction);
     }

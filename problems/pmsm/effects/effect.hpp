@@ -171,10 +171,12 @@ public:
     virtual std::string unseen_bias(const double* /*base*/) const { return {}; }
 
     // ---- what the data allow ----
-    // Narrows the plausible range [lo, hi] of real parameter k to what data of this scale() can tell
-    // apart from other effects (e.g. a dead-time band wider than a fraction of the logged current
-    // acts as a resistance).
-    virtual void narrow_range(std::size_t /*k*/, double& /*lo*/, double& /*hi*/) const {}
+    // Sets the plausible range [lo, hi] of real parameter k, given as the declared one, to what data
+    // of this scale() can tell apart from other effects (e.g. a dead-time band wider than a fraction
+    // of the logged current acts as a resistance). It may reach beyond the declared range on a
+    // machine larger than the declaration foresaw; the fit's search box then stretches to twice
+    // that width, so that a fit can still land beyond the plausible end and be reported.
+    virtual void plausible_range(std::size_t /*k*/, double& /*lo*/, double& /*hi*/) const {}
     // What it means when real parameter k sits at the lower (or upper) end of its range, for the
     // user; empty when nothing more than "at the end of its range" can be said.
     virtual std::string range_end_meaning(std::size_t /*k*/, bool /*upper*/) const { return {}; }

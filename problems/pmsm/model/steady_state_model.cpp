@@ -98,13 +98,14 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
         for (const auto& spec : e->parameter_specs()) {
             if (spec.type != ParameterType::Real) continue;
             double lo = spec.minimum, hi = spec.maximum;
-            e->narrow_range(real, lo, hi);
+            e->plausible_range(real, lo, hi);
             plausible_lower.push_back(lo);
             plausible_upper.push_back(hi);
             linear_.push_back(!sensor && e->model_linear_in(real++));
             names_.push_back(e->name() + "." + spec.name);
-            lower.push_back(spec.minimum);
-            upper.push_back(spec.maximum);
+            // A plausible end beyond the declared range stretches the search to twice that width.
+            lower.push_back(lo < spec.minimum ? spec.maximum - 2.0 * (spec.maximum - lo) : spec.minimum);
+            upper.push_back(hi > spec.maximum ? spec.minimum + 2.0 * (hi - spec.minimum) : spec.maximum);
         }
         stages_ |= e->model_stages();
         for (unsigned bit = static_cast<unsigned>(ModelStage::Coefficients); bit <= static_cast<unsigned>(ModelStage::CurrentRipple); bit <<= 1)

@@ -72,11 +72,11 @@ public:
     // Whether a block's state carries this temperature: only when an effect lists it (model_columns).
     bool reads_temp_winding() const { return reads_temp_winding_; }
     bool reads_temp_magnet() const { return reads_temp_magnet_; }
-    // Table 2 for the base parameters, each effect parameter's declared range for the rest: the box a
-    // fit searches.
+    // Table 2 for the base parameters, each effect parameter's declared range for the rest (stretched
+    // where its plausible range reaches beyond it, Effect::plausible_range): the box a fit searches.
     const Bounds& bounds() const { return bounds_; }
-    // The same, each effect parameter's range narrowed to what these data can tell apart from other
-    // effects (Effect::narrow_range): what a fitted value is judged against. Not the search box: a
+    // The same, each effect parameter's range set to what these data can tell apart from other
+    // effects (Effect::plausible_range): what a fitted value is judged against. Not the search box: a
     // fit must be free to land outside it, so that the landing can be reported.
     const Bounds& plausible() const { return plausible_; }
     // The base parameters of `motor` followed by the effects' own values: the parameters a
