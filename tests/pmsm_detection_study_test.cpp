@@ -284,3 +284,38 @@ TEST_CASE("a drive whose simulation fails stops the study with its case and seed
                                  Catch::Contains("no current produces the flux linkage"));
     }
 }
+
+TEST_CASE("a study of raw logs finds each drive's operating points and sets the noise it measures beside the simulated", "[pmsm][study]") {
+    // The averaged servo logged as a bench logs it, every settling and no segment column: the
+    // diagnosis finds the windows itself, one per operating point of the profile, and measures the
+    // noise from differences; the study's truth is the same drive simulated without noise.
+    testing::TemporaryDirectory dir;
+    const std::string raw = "[[design]]\nname = \"raw\"\nsettings = { logging.transients = true, logging.segment = false }\n";
+    const auto spec = read_study(dir.write("s.toml", study_text(profile_path(), raw, "[1, 2]")));
+    const std::size_t segments = read_simulation_profile(profile_path()).segments.size();
+    const StudyRun run = run_study(spec, study_cases(spec), DiagnosisOptions{});
+    REQUIRE(run.records.size() == 2);
+    for (const auto& r : run.records) {
+        CHECK(r.raw());
+        CHECK(r.windows == segments);
+        CHECK(r.recommended == "base");
+        for (int a = 0; a < 2; ++a) {
+            INFO("seed " << r.seed << ", axis " << a);
+            CHECK(r.noise_simulated[a] > 0.0);
+            CHECK(r.noise_from_differences[a] == Approx(r.noise_simulated[a]).epsilon(0.2));
+        }
+        const auto json = study_record_json(run, r);
+        CHECK(json.at("steady_windows_found") == segments);
+        CHECK(json.contains("noise_simulated"));
+    }
+    CHECK_THAT(study_markdown(spec, run), Catch::Contains("noise within 20 % on both axes") && Catch::Contains("| 2/2 |"));
+    CHECK_THAT(study_csv(run), Catch::Contains("noise_within_20_percent"));
+
+    // A log with its segments measures nothing of the kind, and its outputs say nothing of it.
+    const auto steady = read_study(dir.write("steady.toml", study_text(profile_path(), "", "[1]")));
+    const StudyRun logged = run_study(steady, study_cases(steady), DiagnosisOptions{});
+    REQUIRE(logged.records.size() == 1);
+    CHECK_FALSE(logged.records.front().raw());
+    CHECK_FALSE(study_record_json(logged, logged.records.front()).contains("noise_simulated"));
+    CHECK_THAT(study_markdown(steady, logged), !Catch::Contains("noise within 20 %"));
+}

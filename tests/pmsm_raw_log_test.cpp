@@ -13,6 +13,7 @@
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
 #include "problems/pmsm/diagnosis/noise.hpp"
 #include "problems/pmsm/model/model_spec.hpp"
+#include "problems/pmsm/simulation/drive_simulator.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
 
 using namespace mhb::pmsm;
@@ -22,24 +23,6 @@ namespace {
 struct Rates {
     int drives = 0, windows_match = 0, verdict_match = 0, noise_within = 0;
 };
-
-// The sensors' noise as the residual of the true model sees it: that residual on the noisy log less
-// that on the noise-free drive, row by row over the steady windows.
-Eigen::Vector2d noise_effect(const DriveSimulation& spec, const Measurement& noisy, const Measurement& clean) {
-    const auto& p = spec.motor;
-    auto residual = [&](const Measurement& m, Eigen::Index k, int axis) {
-        const double w = m.omega_e[k];
-        return axis == 0 ? m.u_d[k] - (p.rs * m.i_d[k] - w * p.lq * m.i_q[k])
-                         : m.u_q[k] - (p.rs * m.i_q[k] + w * (p.ld * m.i_d[k] + p.psi_f));
-    };
-    Eigen::Vector2d out;
-    for (int a = 0; a < 2; ++a) {
-        Eigen::VectorXd d(noisy.size());
-        for (Eigen::Index k = 0; k < noisy.size(); ++k) d[k] = residual(noisy, k, a) - residual(clean, k, a);
-        out[a] = std::sqrt((d.array() - d.mean()).square().mean());
-    }
-    return out;
-}
 
 std::string verdict(const Diagnosis& d) {
     return d.recommended.text() + (d.not_in_library ? " / not in the library" : "") + (d.incomplete ? " / incomplete" : "");
@@ -93,7 +76,7 @@ Rates raw_log_rates(const std::string& profile, int first_seed, int seeds, bool 
         const bool same = verdict(on_steady) == verdict(on_raw);
         rates.verdict_match += same ? 1 : 0;
 
-        const Eigen::Vector2d truth = noise_effect(steady_spec, steady.data, clean.data);
+        const Eigen::Vector2d truth = sensor_noise_in_residual(steady_spec.motor, steady.data, clean.data);
         const Eigen::Vector2d measured = on_raw.noise.difference_sigma;
         const bool within = (measured.array() / truth.array() - 1.0).abs().maxCoeff() <= 0.2;
         rates.noise_within += within ? 1 : 0;

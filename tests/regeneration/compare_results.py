@@ -66,7 +66,8 @@ def experiment_jobs():
 def study_jobs(only=None):
     """Each committed study; with `only`, one case of each (a label, or design/label on a study with designs)."""
     jobs = []
-    for name in ("detection_study", "detection_study_averaged", "baldor_study", "detection_study_5kw", "detection_study_100kw"):
+    for name in ("detection_study", "detection_study_averaged", "baldor_study", "detection_study_5kw", "detection_study_100kw",
+                 "detection_study_raw", "detection_study_raw_5kw"):
         command = ["study", f"experiments/pmsm/{name}.toml", "--out", "{out}", "--quiet"]
         rows = None
         if only:
@@ -214,7 +215,7 @@ def main():
         jobs = [j for j in experiment_jobs() if j.name in ("pmsm_table3", "demo")]
         jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal",
                             "baldor_study": "high_small_quiet/clean", "detection_study_5kw": "clean",
-                            "detection_study_100kw": "clean"})
+                            "detection_study_100kw": "clean", "detection_study_raw": "raw/clean", "detection_study_raw_5kw": "raw/clean"})
     jobs += tutorial_jobs(program, scratch)
 
     failed = 0

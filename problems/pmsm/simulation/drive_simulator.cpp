@@ -32,6 +32,30 @@ private:
 
 }  // namespace
 
+Eigen::Vector2d sensor_noise_in_residual(const MotorParameters& motor, const Measurement& noisy, const Measurement& clean,
+                                         const std::vector<std::pair<Eigen::Index, Eigen::Index>>& rows) {
+    if (noisy.size() != clean.size()) return Eigen::Vector2d::Constant(std::nan(""));
+    const auto residual = [&](const Measurement& m, Eigen::Index k, int axis) {
+        const double w = m.omega_e[k];
+        return axis == 0 ? m.u_d[k] - (motor.rs * m.i_d[k] - w * motor.lq * m.i_q[k])
+                         : m.u_q[k] - (motor.rs * m.i_q[k] + w * (motor.ld * m.i_d[k] + motor.psi_f));
+    };
+    const std::vector<std::pair<Eigen::Index, Eigen::Index>> all{{0, noisy.size()}};
+    Eigen::Vector2d out;
+    for (int a = 0; a < 2; ++a) {
+        double sum = 0.0, square = 0.0, n = 0.0;
+        for (const auto& [first, count] : rows.empty() ? all : rows)
+            for (Eigen::Index k = first; k < first + count; ++k) {
+                const double d = residual(noisy, k, a) - residual(clean, k, a);
+                sum += d;
+                square += d * d;
+                n += 1.0;
+            }
+        out[a] = n > 0.0 ? std::sqrt(std::max(0.0, square / n - (sum / n) * (sum / n))) : std::nan("");
+    }
+    return out;
+}
+
 SimulationResult simulate(const DriveSimulation& spec) {
     const auto& c = spec.control;
     const auto& motor = spec.motor;

@@ -15,4 +15,12 @@ namespace mhb::pmsm {
 // plant).
 SimulationResult simulate(const DriveSimulation& spec);
 
+// The sensors' noise as the residual of the true base model sees it: that residual on `noisy` less
+// that on `clean` (the same drive simulated without noise), row by row over `rows` (pairs of first
+// row and row count; the whole log when empty), its standard deviation on u_d and u_q. What a noise
+// estimate from the data should find: the current sensors' noise enters the residual through R i
+// and omega L i as the voltage's own does. NaN when the two logs differ in length.
+Eigen::Vector2d sensor_noise_in_residual(const MotorParameters& motor, const Measurement& noisy, const Measurement& clean,
+                                         const std::vector<std::pair<Eigen::Index, Eigen::Index>>& rows = {});
+
 }  // namespace mhb::pmsm
