@@ -2,6 +2,7 @@
 // where it fails, which library effect is most likely missing and how sure that is
 // (docs/effects.md, "How diagnose decides"; docs/tutorial-missing-physics.md).
 #include <memory>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -46,6 +47,9 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
                            ? choice.reason + "; but diagnose has only the steady model so far, so it falls back to it"
                            : choice.reason.substr(std::string("steady: ").size()));
         }
+        // The report shows the log as read, with the windows found in it shaded.
+        std::optional<pmsm::Measurement> raw_log;
+        if (!o->report.empty() && !data.has_segments()) raw_log = data;
         const auto found = find_operating_points_option(*o, data);
         pmsm::DiagnosisOptions options;
         options.fit = fit_options(*o);
@@ -63,7 +67,10 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
             fmt::print("\nJSON: {}\n", o->json);
         }
         if (!o->report.empty()) {
-            const auto outcome = pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data, data_reading_options(*o));
+            std::optional<pmsm::FoundOperatingPoints> shown;
+            if (found && raw_log) shown.emplace(pmsm::FoundOperatingPoints{*raw_log, *found});
+            const auto outcome =
+                pmsm::write_diagnosis_report(o->report, data, diagnosis, o->data, data_reading_options(*o), shown ? &*shown : nullptr);
             fmt::print("{}report: {} and {} ({} plots)\n", o->json.empty() ? "\n" : "", outcome.markdown.string(),
                        outcome.html.string(), outcome.images.size());
             for (const auto& note : outcome.notes) fmt::print("note: {}\n", note);

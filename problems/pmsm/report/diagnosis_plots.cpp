@@ -299,11 +299,148 @@ std::string candidate_plot(Plotter& plot, const Diagnosis& d) {
     return plot.render("candidates", body, 1100, 560);
 }
 
+// Pixel columns of the raw log's plot: a longer log is drawn as each column's extremes.
+constexpr Eigen::Index log_plot_columns = 1000;
+
+// The raw log's i_d, i_q, omega_e, u_d and u_q against time (row, counted from 1, without a time
+// column), with the steady windows found in it shaded and labelled and the rows dropped as transient
+// left white over a red band. A log of more than two rows per pixel column is written as each column's lowest and
+// highest value of every channel, in the order they occur: the line through them passes every row's
+// value, so a spike of a single row keeps its full height where thinning would drop it.
+std::string operating_points_plot(Plotter& plot, const FoundOperatingPoints& found) {
+    const Measurement& log = found.log;
+    const OperatingPoints& points = found.points;
+    const Eigen::Index n = log.size();
+    if (n == 0) return {};
+    auto x = [&](Eigen::Index k) { return log.t ? (*log.t)[k] : static_cast<double>(k + 1); };
+    const std::vector<const Eigen::VectorXd*> channels{&log.i_d, &log.i_q, &log.omega_e, &log.u_d, &log.u_q};
+    const fs::path file = plot.data("operating_points_log");
+    std::ofstream out(file);
+    const bool decimated = n > 2 * log_plot_columns;
+    out << (decimated ? fmt::format("# x i_d i_q omega_e u_d u_q: each of {} columns of rows as two lines, its lowest and highest value of each "
+                                    "channel in the order they occur (at its first and last row's x)\n",
+                                    log_plot_columns)
+                      : std::string("# x i_d i_q omega_e u_d u_q: every row\n"));
+    if (!decimated) {
+        for (Eigen::Index k = 0; k < n; ++k) {
+            out << fmt::format("{:.9g}", x(k));
+            for (const auto* c : channels) out << fmt::format(" {:.6g}", (*c)[k]);
+            out << "\n";
+        }
+    } else {
+        for (Eigen::Index b = 0; b < log_plot_columns; ++b) {
+            const Eigen::Index first = b * n / log_plot_columns, end = (b + 1) * n / log_plot_columns;
+            std::string early = fmt::format("{:.9g}", x(first)), late = fmt::format("{:.9g}", x(end - 1));
+            for (const auto* c : channels) {
+                Eigen::Index low = 0, high = 0;
+                const auto column = c->segment(first, end - first);
+                column.minCoeff(&low);
+                column.maxCoeff(&high);
+                early += fmt::format(" {:.6g}", column[std::min(low, high)]);
+                late += fmt::format(" {:.6g}", column[std::max(low, high)]);
+            }
+            out << early << "\n" << late << "\n";
+        }
+    }
+    out.close();
+    const fs::path windows = plot.data("operating_points_windows");
+    std::ofstream listed(windows);
+    listed << "# label first_row rows x_first x_last (rows counted from 1, as in the JSON's operating_points)\n";
+    for (std::size_t w = 0; w < points.windows.size(); ++w) {
+        const auto& window = points.windows[w];
+        listed << fmt::format("{} {} {} {:.9g} {:.9g}\n", gnuplot_data_string(fmt::format("steady{}", w + 1)), window.first + 1, window.rows,
+                              x(window.first), x(window.first + window.rows - 1));
+    }
+    listed.close();
+
+    // A transient of a thousand rows in a log of a million is about a pixel column, and a false split
+    // of a window no wider: drawn to scale, neither would show (the step through a transient is
+    // drawn over it). So a transient is white at least four columns wide over the windows' shading,
+    // with a red band along the foot of each panel, and a window narrower than three columns is a
+    // dark green mark, two columns wide, in that band.
+    const double span = x(n - 1) - x(0), column = span / static_cast<double>(log_plot_columns);
+    const std::size_t count = points.windows.size();
+    std::vector<double> from(count), to(count);
+    for (std::size_t w = 0; w < count; ++w) {
+        from[w] = x(points.windows[w].first);
+        to[w] = x(points.windows[w].first + points.windows[w].rows - 1);
+    }
+    auto rectangle = [](double left, double right, double top, const char* colour) {
+        return fmt::format("set object rect from {:.9g}, graph 0 to {:.9g}, graph {} fc rgb '{}' fs solid 1.0 noborder behind\n", left, right, top,
+                           colour);
+    };
+    auto at_least = [&](double left, double right, double columns) {
+        const double middle = (left + right) / 2.0, half = std::max(right - left, columns * column) / 2.0;
+        return std::pair{middle - half, middle + half};
+    };
+    // gnuplot paints the rectangle defined last on top.
+    std::string shading, narrow;
+    for (std::size_t w = 0; w < count; ++w) {
+        const auto [left, right] = at_least(from[w], to[w], 1.0);
+        shading += rectangle(left, right, 1.0, "#cfe8cf");
+        if (to[w] - from[w] < 3.0 * column) {
+            const auto [mark_left, mark_right] = at_least(from[w], to[w], 2.0);
+            narrow += rectangle(mark_left, mark_right, 0.06, "#2e7d32");
+        }
+    }
+    // Each stretch of transient rows, from the row after a window (or the log's first) to the row
+    // before the next window (or the log's last).
+    Eigen::Index next = 0;
+    for (std::size_t w = 0; w <= count; ++w) {
+        const Eigen::Index end = w < count ? points.windows[w].first : n;
+        if (end > next) {
+            const auto [left, right] = at_least(x(next), x(end - 1), 4.0);
+            shading += rectangle(left, right, 1.0, "#ffffff") + rectangle(left, right, 0.06, "#d62728");
+        }
+        if (w < count) next = points.windows[w].first + points.windows[w].rows;
+    }
+    shading += narrow;
+    // Labels stand upright above the top panel, each at its window's middle unless that would write
+    // it over the one before: then just after that one, with a line down to its window.
+    const double plot_left = 0.08, plot_right = 0.98, width = 1100.0, label_height = 12.0;
+    const double pixels_per_x = (plot_right - plot_left) * width / span;
+    // More labels than fit across the panel: every k-th, so that none runs off the page.
+    const auto every = static_cast<std::size_t>(std::ceil(static_cast<double>(count) * label_height / ((plot_right - plot_left) * width * 0.9)));
+    std::string labels;
+    double previous = -INFINITY;
+    for (std::size_t w = 0; w < count; ++w) {
+        if (w % every != 0) continue;
+        const double middle = (from[w] + to[w]) / 2.0, at = std::max(middle, previous + label_height / pixels_per_x);
+        previous = at;
+        labels += fmt::format("set label {} 'steady{}' at {:.9g}, graph 1.07 left rotate by 90 offset 0.35, 0 font ',8' front\n", w + 1, w + 1, at);
+        labels += fmt::format("set arrow {} from {:.9g}, graph 1.0 to {:.9g}, graph 1.06 nohead lw 1 lc rgb '#555555' front\n", w + 1, middle, at);
+    }
+    const std::vector<std::string> names{"i_d (A)", "i_q (A)", "omega_e (rad/s)", "u_d (V)", "u_q (V)"};
+    const int panels = static_cast<int>(names.size());
+    const std::string title = fmt::format("The log as read: shaded green, the {} steady windows found; white, the {} of {} rows dropped as transient",
+                                          count, points.transient_rows, points.rows);
+    std::string body = fmt::format("set multiplot layout {},1 title {} noenhanced margins {}, {}, 0.06, 0.86 spacing 0, 0.012\n", panels,
+                                   gnuplot_quote(title), plot_left, plot_right);
+    body += fmt::format("set grid\nset xrange [{:.9g}:{:.9g}]\nset ytics font ',9'\nset format x ''\n", x(0), x(n - 1));
+    const std::string scale = fmt::format("red band: transient (at least 4 pixel columns wide), dark green: a window narrower than 3 columns{}",
+                                          decimated ? fmt::format("; about {} rows per column, each drawn from its lowest to its highest value",
+                                                                  (n + log_plot_columns - 1) / log_plot_columns)
+                                                    : std::string());
+    body += fmt::format("set label 1000000 {} at screen 0.5, screen 0.95 center font ',9' noenhanced\n", gnuplot_quote(scale));
+    body += shading;
+    for (int p = 0; p < panels; ++p) {
+        if (p == 0) body += labels;
+        if (p == panels - 1) body += fmt::format("set format x '%g'\nset xlabel {}\n", gnuplot_quote(log.t ? "t (s)" : "row"));
+        body += fmt::format("set ylabel {} noenhanced\n", gnuplot_quote(names[static_cast<std::size_t>(p)]));
+        body += fmt::format("plot {} using 1:{} with lines lw 1 lc rgb '{}' notitle\n", gnuplot_quote(file.string()), 2 + p, model_colour);
+        if (p == 0) body += "unset label\nunset arrow\n";
+    }
+    body += "unset multiplot\n";
+    return plot.render("operating_points", body, 1100, 1000);
+}
+
 }  // namespace
 
-DiagnosisPlots draw_diagnosis_plots(const fs::path& directory, const Measurement& data, const Diagnosis& d, ReportOutcome& outcome) {
+DiagnosisPlots draw_diagnosis_plots(const fs::path& directory, const Measurement& data, const Diagnosis& d, ReportOutcome& outcome,
+                                    const FoundOperatingPoints* found) {
     DiagnosisPlots out;
     Plotter plot(directory, outcome);
+    if (found) out.operating_points = operating_points_plot(plot, *found);
     PlottedResiduals residuals;
     Eigen::VectorXd storage;
     residuals.model = residual_of(data, d.model, storage);

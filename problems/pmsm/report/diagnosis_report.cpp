@@ -42,12 +42,29 @@ void add_image(Document& doc, const std::string& file, const std::string& captio
     if (!file.empty()) doc.add(Image{file, caption});
 }
 
+// Where the segments of a log without a segment column came from, so that the windows can be checked
+// against the log before the diagnosis on them is trusted.
+void add_found_operating_points(Document& doc, const FoundOperatingPoints& found, const DiagnosisPlots& png) {
+    const auto& p = found.points;
+    doc.add(Heading{2, "Operating points found in the log"});
+    doc.add(Paragraph{fmt::format("The log has no segment column: its steady windows, found automatically, are the segments below (steady1 to "
+                                  "steady{}), and the rows between them are dropped as transient (docs/diagnosis.md, \"Operating points found in a "
+                                  "raw log\"; `--steady-bandwidth`, `--steady-min-rows`, `--steady-false-alarm` set the test).",
+                                  p.windows.size())});
+    add_image(doc, png.operating_points,
+              fmt::format("{} steady windows (shaded) found by the moving-sum (MOSUM) change-point test on {} with a bandwidth of {} rows a side "
+                          "(false-alarm probability {:g}, windows of at least {} rows); {} of {} rows dropped as transient (white)",
+                          p.windows.size(), fmt::join(p.channels, ", "), p.bandwidth, p.false_alarm, p.min_rows, p.transient_rows, p.rows));
+}
+
 // The findings, the search over sets of effects and the recommendation, with the commands to run next.
-void add_summary(Document& doc, const Diagnosis& d, const DiagnosisPlots& png, const std::string& data_path, const std::string& data_options) {
+void add_summary(Document& doc, const Diagnosis& d, const DiagnosisPlots& png, const std::string& data_path, const std::string& data_options,
+                 const FoundOperatingPoints* found) {
     const auto& m = d.model;
     doc.add(Heading{1, fmt::format("Diagnosis of `{}` on `{}`", m.spec.text(), data_path)});
     doc.add(Paragraph{fmt::format("{} samples in {} segments; optional columns: {}.", d.samples, d.segments.size(),
                                   d.columns.empty() ? std::string("none") : fmt::format("{}", fmt::join(d.columns, ", ")))});
+    if (found) add_found_operating_points(doc, *found, png);
     doc.add(Heading{2, "What the diagnosis says"});
     doc.add(BulletList{d.findings});
     doc.add(Heading{2, "The search over sets of effects"});
@@ -264,13 +281,13 @@ void add_doubts(Document& doc, const Diagnosis& d) {
 }  // namespace
 
 ReportOutcome write_diagnosis_report(const fs::path& directory, const Measurement& data, const Diagnosis& d, const std::string& data_path,
-                                     const std::string& data_options) {
+                                     const std::string& data_options, const FoundOperatingPoints* found) {
     ReportOutcome outcome;
     fs::create_directories(directory);
-    const DiagnosisPlots png = draw_diagnosis_plots(directory, data, d, outcome);
+    const DiagnosisPlots png = draw_diagnosis_plots(directory, data, d, outcome, found);
 
     Document doc;
-    add_summary(doc, d, png, data_path, data_options);
+    add_summary(doc, d, png, data_path, data_options, found);
     add_fitted_model(doc, d);
     add_where_it_fails(doc, d, data, png);
     add_apparent_parameters(doc, d, png);

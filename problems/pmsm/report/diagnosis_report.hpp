@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "problems/pmsm/data/operating_points.hpp"
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
 
 namespace mhb::pmsm {
@@ -27,10 +28,19 @@ struct ReportOutcome {
     std::vector<std::string> notes;             // e.g. gnuplot missing
 };
 
+// A log without a segment column as it was read, and the steady windows found in it, which became the
+// segments of the measurement diagnosed.
+struct FoundOperatingPoints {
+    const Measurement& log;
+    const OperatingPoints& points;
+};
+
 // Writes report.md, report.html and the plots into `directory` (created). `data` is the measurement diagnosed;
 // `data_options` (e.g. " --columns i_d=Id") follow `data_path` in the commands the report suggests,
-// so that they read the file as the diagnosis did.
+// so that they read the file as the diagnosis did. With `found`, the report shows the raw log with its
+// steady windows shaded.
 ReportOutcome write_diagnosis_report(const std::filesystem::path& directory, const Measurement& data, const Diagnosis& diagnosis,
-                                     const std::string& data_path, const std::string& data_options = "");
+                                     const std::string& data_path, const std::string& data_options = "",
+                                     const FoundOperatingPoints* found = nullptr);
 
 }  // namespace mhb::pmsm
