@@ -12,7 +12,7 @@ each job twice.
 
 The subset (about half a minute on 2 cores) reruns Table 3, the demo (every optimizer on classic and
 BBOB functions), one case of each detection study (of the 5 kW and 100 kW machines' studies the clean
-drives) and the tutorial's diagnosis; --all reruns every experiment and study (about 15 minutes on
+drives) and the tutorial's diagnoses; --all reruns every experiment and study (about 15 minutes on
 2 cores before the two machines' studies were added, and about 12 more for results/cec2022, 25 more
 for results/cec2017, 4 for results/cec2022_lshade_code_choices and 50 for results/cec2017_jso_lshade
 as they were measured, docs/test-functions.md and docs/algorithms.md).
@@ -79,15 +79,20 @@ def study_jobs(only=None):
 
 
 def tutorial_jobs(program, scratch):
-    """The tutorial's mystery drive: simulated, then diagnosed with the base and the final model."""
+    """The tutorial's mystery drive: simulated, then diagnosed with the base and the final model; its
+    raw bench log: simulated, then diagnosed, for the plot of its operating points."""
     data = scratch / "mystery.csv"
     run(program, ["simulate", "experiments/pmsm/mystery_drive.toml", "--out", str(data)])
+    bench = scratch / "bench.csv"
+    run(program, ["simulate", "experiments/pmsm/raw_bench_log.toml", "--out", str(bench)])
     figures = SOURCE / "docs" / "tutorial-missing-physics"
     return [
         Job("tutorial, base model", ["diagnose", "--data", str(data), "--model", "base", "--report", "{out}"], figures,
             files={"candidates_base.png": "candidates.png", "path_base.png": "path.png"}),
         Job("tutorial, final model", ["diagnose", "--data", str(data), "--model", "base+rs_thermal+deadtime+encoder_offset",
                                       "--report", "{out}"], figures, files={"segment_rms_final.png": "segment_rms.png"}),
+        Job("tutorial, raw bench log", ["diagnose", "--data", str(bench), "--model", "base", "--report", "{out}"], figures,
+            files={"operating_points_bench.png": "operating_points.png"}),
     ]
 
 
