@@ -11,8 +11,8 @@ each job twice.
   tests/regeneration/compare_results.py --mhbench build/mhbench --all      # every committed result
 
 The subset (about half a minute on 2 cores) reruns Table 3, the demo (every optimizer on classic and
-BBOB functions), one case of each detection study (of the 5 kW and 100 kW machines' studies the clean
-drives) and the tutorial's diagnoses; --all reruns every experiment and study (about 15 minutes on
+BBOB functions), one case of each detection study (of the 5 kW and 100 kW machines' studies and of
+the two raw-log studies the clean drives) and the tutorial's diagnoses; --all reruns every experiment and study (about 15 minutes on
 2 cores before the two machines' studies were added, and about 12 more for results/cec2022, 25 more
 for results/cec2017, 4 for results/cec2022_lshade_code_choices and 50 for results/cec2017_jso_lshade
 as they were measured, docs/test-functions.md and docs/algorithms.md).
