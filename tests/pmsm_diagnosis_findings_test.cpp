@@ -100,6 +100,34 @@ TEST_CASE("one effect found: what it is, its values and the evidence against the
     CHECK_FALSE(says(f, "No missing effect: the residual is at the noise floor and no library effect earns its parameters."));
 }
 
+TEST_CASE("one effect found where the table divides its evidence by an overdispersion: the search's evidence is quoted, the table's beside it",
+          "[pmsm][diagnosis][findings]") {
+    // Saturating iron on the device servo: the table of single additions divides the likelihood
+    // ratio by the overdispersion of the segment means (8.48) and shows +30.3; the search, which
+    // does not divide, added the effect at -87.6. Quoting the +30.3 alone gave a positive dBIC as
+    // the evidence for the effect found.
+    Diagnosis d = diagnosis_of_base();
+    d.noise.dispersion = 8.48;
+    Candidate found, next;
+    found.effect = "saturation";
+    found.delta_bic = 30.3;
+    found.verdict = Verdict::NotSupported;
+    next.effect = "encoder_offset";
+    next.delta_bic = 7.2;
+    next.verdict = Verdict::NotSupported;
+    d.candidates = {next, found};
+    d.path.push_back(step(fit_of("base+saturation", 0.035, {{"saturation.q_self", 0.0062}}), StepKind::Added, "saturation"));
+    d.path.back().delta_bic = -87.6;
+    d.path.back().at_noise_floor = true;
+    d.missing_effect_found = true;
+    d.winner = "saturation";
+    const auto f = findings_of(d, LackOfFit{}, 0.25);
+    CHECK(std::any_of(f.begin(), f.end(), [](const std::string& s) {
+        return s.find("evidence dBIC = -87.6 in the search over sets (30.3 in the table above, which divides the evidence by the overdispersion "
+                      "of the segment means, 8.48); the next best there (encoder_offset) 7.2.") != std::string::npos;
+    }));
+}
+
 TEST_CASE("a set found step by step, with an effect pruned on the way", "[pmsm][diagnosis][findings]") {
     Diagnosis d = diagnosis_of_base();
     d.path.push_back(step(fit_of("base+deadtime", 0.1), StepKind::Added, "deadtime"));

@@ -45,8 +45,8 @@ const char* unit_of(const std::string& variable) {
 std::string effect_values(const ModelFit& fit, Eigen::Index from) {
     std::string values;
     for (Eigen::Index j = from; j < fit.values.size(); ++j)
-        values += fmt::format("{}{} = {:.4g} {}", values.empty() ? "" : ", ", fit.names[static_cast<std::size_t>(j)], fit.values[j],
-                              fit.units[static_cast<std::size_t>(j)]);
+        values += fmt::format("{}{} = {:.4g}{}{}", values.empty() ? "" : ", ", fit.names[static_cast<std::size_t>(j)], fit.values[j],
+                              fit.units[static_cast<std::size_t>(j)].empty() ? "" : " ", fit.units[static_cast<std::size_t>(j)]);
     return values;
 }
 
@@ -110,9 +110,19 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
         const Candidate* next = nullptr;
         for (const auto& c : d.candidates)
             if (&c != w && !next) next = &c;
-        f.push_back(fmt::format("Missing effect: {} (its fit: {}). Adding it lowers the residual to {:.4g} V rms; evidence dBIC = {:.1f}{}.",
-                                added.front(), effect_values(last.fit, m.values.size()), last.fit.rms.total, w ? w->delta_bic : last.delta_bic,
-                                next ? fmt::format(", the next best ({}) {:.1f}", next->effect, next->delta_bic) : std::string()));
+        // The table of single additions divides its evidence by the overdispersion of the segment
+        // means; the search does not, and its evidence is what added the effect: quoting only the
+        // table's would give a positive dBIC as the reason for an effect the search found.
+        const std::string evidence =
+            w && d.noise.dispersion > 1.0
+                ? fmt::format("{:.1f} in the search over sets ({:.1f} in the table above, which divides the evidence by the overdispersion "
+                              "of the segment means, {:.3g}){}",
+                              last.delta_bic, w->delta_bic, d.noise.dispersion,
+                              next ? fmt::format("; the next best there ({}) {:.1f}", next->effect, next->delta_bic) : std::string())
+                : fmt::format("{:.1f}{}", w ? w->delta_bic : last.delta_bic,
+                              next ? fmt::format(", the next best ({}) {:.1f}", next->effect, next->delta_bic) : std::string());
+        f.push_back(fmt::format("Missing effect: {} (its fit: {}). Adding it lowers the residual to {:.4g} V rms; evidence dBIC = {}.",
+                                added.front(), effect_values(last.fit, m.values.size()), last.fit.rms.total, evidence));
     } else {
         std::string steps;
         for (std::size_t k = 1; k < d.path.size(); ++k)

@@ -44,6 +44,11 @@ std::string diagnosis_text(const Diagnosis& d) {
         t += fmt::format("{:<4} {:<16} {:<17} {:>12.4g} {:>11.1f} {:>12} {}\n", k + 1, c.effect, to_string(c.verdict), c.fit.rms.total, c.delta_bic,
                          c.loso_rms ? fmt::format("{:.4g}", *c.loso_rms) : std::string("—"), to_string(c.identifiability));
     }
+    if (d.noise.dispersion > 1.0)
+        t += fmt::format("(dBIC above divided by {:.3g}, the overdispersion of the best single fit's segment means: structure no single "
+                         "effect explains is not counted as evidence; the search over sets below does not divide, docs/diagnosis.md, "
+                         "section 1)\n",
+                         d.noise.dispersion);
     t += "\n" + path_text(d) + "\n";
     for (const auto& f : d.findings) t += "- " + f + "\n";
     if (!d.lack_of_fit.mechanical_angle.empty()) t += "mechanical orders (k/p of the electrical frequency): " + d.lack_of_fit.mechanical_angle + "\n";
