@@ -128,6 +128,22 @@ TEST_CASE("one effect found where the table divides its evidence by an overdispe
     }));
 }
 
+TEST_CASE("an effect with strong evidence that does not predict left-out operating points is named, and the verdict says why it is not added",
+          "[pmsm][diagnosis][findings]") {
+    // The device servo's saturating iron on nine operating points (seed 1 of the study's clear case):
+    // the search's evidence -69.9 and 62 % of the excess, but fitted without one operating point the
+    // law predicts it better than base in 2 of 9.
+    Diagnosis d = diagnosis_of_base();
+    d.unpredictive.push_back({"saturation", -69.9, 0.62, 6, 2, 9});
+    const auto f = findings_of(d, LackOfFit{}, 0.25);
+    CHECK(says(f, "saturation would explain 62 % of what base leaves (dBIC -69.9 in the search over sets), but fitted without one operating "
+                  "point it predicts that point better than base in only 2 of 9: the 9 operating points do not pin its 6 parameters, so it is "
+                  "not added. More operating points (other currents and speeds) would decide."));
+    CHECK_FALSE(says(f, "No missing effect: the residual is at the noise floor and no library effect earns its parameters."));
+    CHECK(says(f, "No missing effect is recommended: the residual is at the noise floor, and the library effects with strong evidence do not "
+                  "carry over to operating points they were not fitted to (below)."));
+}
+
 TEST_CASE("a set found step by step, with an effect pruned on the way", "[pmsm][diagnosis][findings]") {
     Diagnosis d = diagnosis_of_base();
     d.path.push_back(step(fit_of("base+deadtime", 0.1), StepKind::Added, "deadtime"));

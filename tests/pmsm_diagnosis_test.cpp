@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "problems/pmsm/report/diagnosis_report.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -152,4 +153,28 @@ TEST_CASE("mhbench diagnose --report into a directory named in shell syntax runs
     REQUIRE(std::filesystem::exists(report / "report.md"));
     REQUIRE(std::filesystem::exists(report / "candidates.png"));
     REQUIRE_FALSE(std::filesystem::exists(marker));
+}
+
+TEST_CASE("an effect turned down for its held-out prediction is named with what it would explain (an example: one drive)",
+          "[pmsm][diagnosis][search]") {
+    // Seed 1 of the device study's clear saturation: nine operating points for the law's six
+    // parameters. The search's evidence for saturation is strong and it explains most of what base
+    // leaves, but fitted without one operating point it predicts that point worse in most of them.
+    auto drive = read_simulation_profile(std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_diagnosis_profile.toml");
+    drive.seed = 1;
+    drive.device->saturation.saturation_current = 0.3;
+    DiagnosisOptions options;
+    options.pole_pairs = drive.motor.pole_pairs;
+    const Diagnosis d = diagnose(simulate(drive).data, parse_model_spec("base"), options);
+    REQUIRE(d.recommended.text() == "base");
+    REQUIRE(d.unpredictive.size() == 1);
+    const auto& u = d.unpredictive.front();
+    CHECK(u.effect == "saturation");
+    CHECK(u.delta_bic < -10.0);
+    CHECK(u.explained > 0.5);
+    CHECK(u.segments == 9);
+    CHECK(2 * u.better < u.segments);
+    CHECK(std::any_of(d.findings.begin(), d.findings.end(),
+                      [](const std::string& f) { return f.rfind("saturation would explain", 0) == 0; }));
+    CHECK(diagnosis_json(d).at("unpredictive_additions").size() == 1);
 }

@@ -30,6 +30,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     const Measurement design = search_design(data, options.fit);
     const SetSearch search = search_effect_sets(data, design, spec, baseline.model, screen.library, out.candidates, options);
     out.pruned = search.pruned;
+    out.unpredictive = search.unpredictive;
     out.noise = measure_noise(data, search, out.candidates);
 
     // Held for the whole diagnosis: one double a row, against the 800 bytes a row the rest takes.

@@ -139,6 +139,18 @@ struct NotTried {
     std::string column;  // the column the data lack
 };
 
+// An addition the search turned down only because it predicts too few left-out segments: strong
+// evidence and a relevant share of the residual, but a shape that does not carry over to an
+// operating point it was not fitted to (docs/diagnosis.md, section 1).
+struct UnpredictiveAddition {
+    std::string effect;
+    double delta_bic = 0.0;     // the search's evidence for it
+    double explained = 0.0;     // share of the excess residual of the set it would extend
+    int added_parameters = 0;
+    int better = 0;             // left-out segments it predicts better than that set
+    int segments = 0;
+};
+
 struct Harmonic {
     int order = 0;                                  // of the electrical angle
     Eigen::Vector2d amplitude{0.0, 0.0};            // V, d and q
@@ -238,6 +250,9 @@ struct Diagnosis {
     // the noise floor with plausible values, the model diagnosed otherwise.
     std::vector<PathStep> path;
     std::vector<std::string> pruned;
+    // The additions the search's last round turned down only for their held-out prediction, when
+    // that round added nothing: what a log with more operating points could decide.
+    std::vector<UnpredictiveAddition> unpredictive;
     ModelSpec recommended;
     // For each library effect the recommended model leaves out, the smallest size of each of its
     // size parameters this log would reveal.

@@ -74,10 +74,22 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     std::stable_sort(supported.begin(), supported.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     const std::vector<double> current_folds =
         options.leave_one_out ? leave_one_segment_out(data, current.spec, current.values) : std::vector<double>{};
-    std::size_t chosen = supported.size();
-    for (std::size_t k = 0; k < supported.size() && chosen == supported.size(); ++k)
-        if (predicts_held_out(data, supported[k].second->fit, current_folds)) chosen = k;
     RoundChoice choice;
+    std::size_t chosen = supported.size();
+    for (std::size_t k = 0; k < supported.size() && chosen == supported.size(); ++k) {
+        const Addition& a = *supported[k].second;
+        if (current_folds.empty()) {
+            chosen = k;
+            break;
+        }
+        const HeldOutComparison held_out = compare_held_out(data, a.fit, current_folds);
+        if (held_out.predicts()) {
+            chosen = k;
+            break;
+        }
+        choice.unpredictive.push_back({a.effect, supported[k].first, excess > 0.0 ? (current.rss() - a.fit.rss()) / excess : 0.0,
+                                       a.added_parameters, held_out.better, static_cast<int>(held_out.folds.size())});
+    }
     if (chosen == supported.size()) return choice;
     choice.best = supported[chosen].second;
     const Addition& best = *choice.best;
@@ -145,7 +157,10 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
     while (!round.empty() && static_cast<int>(s.steps.size()) - 1 < options.max_effects) {
         const ModelFit current = s.steps.back().fit;
         const RoundChoice choice = choose_addition(data, design, current, round, options);
-        if (!choice.best) break;
+        if (!choice.best) {
+            s.unpredictive = choice.unpredictive;
+            break;
+        }
         if (choice.tie.size() > 1) {
             s.tie = choice.tie;
             s.tie_spec = current.spec;

@@ -34,6 +34,7 @@ struct SetSearch {
     std::vector<std::string> tie;   // when the search stopped on two or more effects it cannot order
     ModelSpec tie_spec;
     Eigen::VectorXd tie_values;
+    std::vector<UnpredictiveAddition> unpredictive;  // of the round that added nothing
 };
 
 // One round of forward selection from `current`: the supported addition with the strongest evidence
@@ -41,6 +42,9 @@ struct SetSearch {
 struct RoundChoice {
     const Addition* best = nullptr;  // into the round; none when no addition qualifies
     std::vector<std::string> tie;    // the best first, then each effect the evidence or the design cannot separate from it
+    // Supported additions with stronger evidence than the best (all of them, without a best) that
+    // predict too few held-out segments.
+    std::vector<UnpredictiveAddition> unpredictive;
 };
 RoundChoice choose_addition(const Measurement& data, const Measurement& design, const ModelFit& current, const std::vector<Addition>& round,
                             const DiagnosisOptions& options);

@@ -171,9 +171,12 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double 
                 (remaining.significant ? remaining.signature : d.lack_of_fit.signature) + ".";
         f.push_back(text);
     } else if (!d.missing_effect_found) {
+        const std::string none = d.unpredictive.empty()
+                                     ? "No missing effect: the residual is at the noise floor and no library effect earns its parameters."
+                                     : "No missing effect is recommended: the residual is at the noise floor, and the library effects with strong "
+                                       "evidence do not carry over to operating points they were not fitted to (below).";
         f.push_back(d.lack_of_fit.means_available || has_column(d, "theta_e")
-                        ? std::string("No missing effect: the residual is at the noise floor and no library effect earns its parameters.") +
-                              (d.detection_limits.empty() ? "" : " An effect smaller than this log's detection limit (listed) may still be present.")
+                        ? none + (d.detection_limits.empty() ? "" : " An effect smaller than this log's detection limit (listed) may still be present.")
                         : std::string("No missing effect can be seen on this data."));
         if (const std::string rest = structure_at_floor(d.path.front(), floor_tolerance); !rest.empty()) f.push_back(rest);
     }
@@ -268,6 +271,15 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(), other_missing_effect(d, c.effect)));
     for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
     unresolved_findings(d, left_by_last_step, floor_tolerance, f);
+    // Strong evidence that a leave-one-segment-out check turned down: the log's operating points do
+    // not pin the effect's shape, which more of them would.
+    const std::string after = d.path.empty() ? d.model.spec.text() : d.path.back().fit.spec.text();
+    for (const auto& u : d.unpredictive)
+        f.push_back(fmt::format("{} would explain {:.0f} % of what {} leaves (dBIC {:.1f} in the search over sets), but fitted without one operating "
+                                "point it predicts that point better than {} in only {} of {}: the {} operating points do not pin its {} "
+                                "parameters, so it is not added. More operating points (other currents and speeds) would decide.",
+                                u.effect, 100.0 * u.explained, after, u.delta_bic, after, u.better, u.segments, u.segments,
+                                u.added_parameters));
     mechanical_findings(d, floor_tolerance, f);
     if (!d.model_intervals_valid())
         f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",

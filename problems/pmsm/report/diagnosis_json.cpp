@@ -76,6 +76,11 @@ json diagnosis_json(const Diagnosis& d) {
     }
     out["path"] = path;
     out["pruned"] = d.pruned;
+    auto unpredictive = nlohmann::ordered_json::array();
+    for (const auto& u : d.unpredictive)
+        unpredictive.push_back({{"effect", u.effect}, {"dbic", u.delta_bic}, {"explained", u.explained}, {"added_parameters", u.added_parameters},
+                                {"held_out_better", u.better}, {"held_out_segments", u.segments}});
+    out["unpredictive_additions"] = unpredictive;
     out["findings"] = d.findings;
     json limits = json::array();
     for (const auto& l : d.detection_limits)
