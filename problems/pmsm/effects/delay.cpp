@@ -3,9 +3,14 @@
 // the applied vector is the command rotated back by omega tau, so the logged command is
 // e^{j omega tau} times what the machine needs: Delta u_d ~ -omega tau u_q, Delta u_q ~ +omega tau u_d.
 #include "problems/pmsm/effects/effect.hpp"
+#include "problems/pmsm/effects/row_memo.hpp"
 
 namespace mhb::pmsm {
 namespace {
+
+// e^{j omega tau} of a block's rows (RowMemo): a sine and cosine a row in each of the affine split's
+// lanes and the Jacobian's predictions was 4.5 % of a diagnosis of 10^5 rows.
+thread_local RowMemo<Complex> turns;
 
 class Delay final : public Effect {
 public:
@@ -17,8 +22,11 @@ public:
     bool is_size(std::size_t) const override { return true; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     void model(ModelStage, const double* p, ModelState& s) const override {
+        // The affine split runs this stage in each of its five lanes at the same angles.
+        const Complex* turn = turns.of(p[0], s.u_d.size(), [&](Eigen::Index k) { return s.omega[k] * p[0]; },
+                                       [](double angle) { return std::polar(1.0, angle); });
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-            const Complex u = std::polar(1.0, s.omega[k] * p[0]) * Complex{s.u_d[k], s.u_q[k]};
+            const Complex u = turn[k] * Complex{s.u_d[k], s.u_q[k]};
             s.u_d[k] = u.real();
             s.u_q[k] = u.imag();
         }

@@ -95,9 +95,13 @@ struct CoenergySaturation {
         const double r = 1.0 + (u / k) * (u / k);
         return 1.0 - 1.0 / (r * std::sqrt(r));
     }
-    Complex flux_change(double id, double iq) const {
+    Complex flux_change(double id, double iq) const { return flux_change(id, iq, std::pow(cross_base(iq), v)); }
+    // |y|, whose V-th power the cross-saturation takes.
+    double cross_base(double iq) const { return std::abs(iq / base_current); }
+    // The same given yv = pow(cross_base(iq), v), for a caller that has it already (the model side
+    // remembers it between the predictions of a Jacobian, effects/saturation.cpp).
+    Complex flux_change(double id, double iq, double yv) const {
         const double x = id / base_current, y = iq / base_current, ay = std::abs(y);
-        const double yv = std::pow(ay, v);
         return {base_flux * (-0.5 * a * y * y - c * yv * ay * ay / (v + 2.0) + e * x * x),
                 base_flux * (-q * knee_loss(y, knee) - (a + c * yv) * x * y)};
     }
