@@ -69,7 +69,7 @@ ModelCheck check_model(const Measurement& data, const ModelSpec& spec, const Bas
     ModelCheck check;
     const ModelFit& model = baseline.model;
     check_base(model, check.base_problems);
-    if (options.leave_one_out) check.folds = leave_one_segment_out(data, spec, model.values);
+    if (options.leave_one_out) check.folds = leave_one_segment_out(data, model);
     if (!check.folds.empty()) check.loso_rms = pooled_rms(check.folds, data.size());
     check.segments = segment_conditions(data, model, spec.effects.empty() ? nullptr : &baseline.build_up.front());
     const auto ranges = segment_ranges(data);

@@ -73,7 +73,7 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     }
     std::stable_sort(supported.begin(), supported.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     const std::vector<double> current_folds =
-        options.leave_one_out ? leave_one_segment_out(data, current.spec, current.values) : std::vector<double>{};
+        options.leave_one_out ? leave_one_segment_out(data, current) : std::vector<double>{};
     RoundChoice choice;
     std::size_t chosen = supported.size();
     for (std::size_t k = 0; k < supported.size() && chosen == supported.size(); ++k) {

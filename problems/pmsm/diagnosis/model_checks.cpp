@@ -19,7 +19,12 @@ namespace mhb::pmsm {
 // base parameters (the prediction is linear in them) and first order in the effect parameters, which
 // the fit on all rows has already placed. Effect parameters at an end of their range stay there, as
 // they would in a bounded refit.
-std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values) {
+namespace {
+
+// `kept`: the fit's own per-segment sums when they are of these data, these segments, these values
+// and every column asked for (the same numbers a pass would give); null to make them.
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values,
+                                          const SegmentSums* kept) {
     const auto ranges = segment_ranges(data);
     std::vector<double> sse;
     if (ranges.size() < 3) return sse;
@@ -34,13 +39,30 @@ std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSp
             columns.push_back(j);
     std::vector<Eigen::Index> starts;
     for (const auto& r : ranges) starts.push_back(r.first);
-    const auto sums = range_normal_equations(*model, values, columns, starts);
+    std::vector<Eigen::Index> positions;
+    if (kept != nullptr && kept->data == &data && kept->samples == data.size() && kept->starts == starts &&
+        kept->values.size() == values.size() && (kept->values.array() == values.array()).all())
+        for (const auto j : columns)
+            if (const auto at = std::find(kept->columns.begin(), kept->columns.end(), j); at != kept->columns.end())
+                positions.push_back(static_cast<Eigen::Index>(at - kept->columns.begin()));
+    const auto sums = positions.size() == columns.size() && !columns.empty() ? select_columns(kept->sums, positions)
+                                                                             : range_normal_equations(*model, values, columns, starts);
     const Eigen::MatrixXd steps = leave_one_range_out_steps(sums);
     for (std::size_t s = 0; s < ranges.size(); ++s) {
         const Eigen::VectorXd step = steps.col(static_cast<Eigen::Index>(s));
         sse.push_back(std::max(sums.total[s] - 2.0 * step.dot(sums.moment[s]) + step.dot(sums.gram[s] * step), 0.0));
     }
     return sse;
+}
+
+}  // namespace
+
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values) {
+    return leave_one_segment_out(data, spec, values, nullptr);
+}
+
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelFit& fit) {
+    return leave_one_segment_out(data, fit.spec, fit.values, fit.segment_sums.get());
 }
 
 double pooled_rms(const std::vector<double>& sse, Eigen::Index samples) {
@@ -117,7 +139,7 @@ void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std
 
 HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds) {
     HeldOutComparison c;
-    c.folds = leave_one_segment_out(data, candidate.spec, candidate.values);
+    c.folds = leave_one_segment_out(data, candidate);
     for (std::size_t k = 0; k < c.folds.size(); ++k) c.better += c.folds[k] < model_folds[k] ? 1 : 0;
     return c;
 }

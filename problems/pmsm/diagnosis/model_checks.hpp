@@ -13,6 +13,9 @@ namespace mhb::pmsm {
 // the model linearised at `values`, exact where the prediction is linear in the free parameters.
 // Empty with fewer than three segments.
 std::vector<double> leave_one_segment_out(const Measurement& data, const ModelSpec& spec, const Eigen::VectorXd& values);
+// The same for `fit` (of `data`) at its values, from the per-segment sums its intervals made
+// (ModelFit::segment_sums) when it kept them: the same numbers without another pass over the rows.
+std::vector<double> leave_one_segment_out(const Measurement& data, const ModelFit& fit);
 
 // The rms prediction error over both axes of `samples` rows from their squared errors per segment.
 double pooled_rms(const std::vector<double>& sse, Eigen::Index samples);

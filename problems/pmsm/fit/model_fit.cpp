@@ -431,13 +431,12 @@ Polished polish(const Projection& projection, const SteadyStateModel& model, Pro
 // widens the resistance it trades with, although every segment agrees on the resistance given the
 // band. Each widened interval takes t with S - 1 degrees of freedom; a well-specified fit keeps its
 // intervals.
-void widen_for_segment_spread(const SteadyStateModel& model, const Eigen::VectorXd& values, const std::vector<Eigen::Index>& kept,
+// `sums`: the per-segment normal equations of the kept parameters at `values`.
+void widen_for_segment_spread(const Eigen::VectorXd& values, const std::vector<Eigen::Index>& kept, const RangeNormalEquations& sums,
                               ModelFit& fit) {
     const auto segments = fit.segments.size();
     if (segments < minimum_jackknife_segments) return;
-    std::vector<Eigen::Index> starts;
-    for (const auto& s : fit.segments) starts.push_back(s.first);
-    const Eigen::MatrixXd steps = leave_one_range_out_steps(range_normal_equations(model, values, kept, starts));
+    const Eigen::MatrixXd steps = leave_one_range_out_steps(sums);
     const auto p = static_cast<Eigen::Index>(kept.size());
     const double count = static_cast<double>(segments);
     const Eigen::MatrixXd centred = steps.colwise() - steps.rowwise().mean();
@@ -507,13 +506,34 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
         // A parameter that moves the prediction by less than a nanovolt over its whole range (the
         // phase of a harmonic whose amplitude is zero) is not determined at all; it is left out of
         // the covariance, which would otherwise be singular for every parameter.
-        const Eigen::MatrixXd gram = range_normal_equations(model, values, columns, {0}).gram.front();
-        std::vector<Eigen::Index> kept;
+        // The same pass makes the per-segment sums of the segment jackknife and of the fit's
+        // leave-one-segment-out prediction (diagnosis/model_checks.hpp), which needs three segments.
+        std::vector<std::vector<Eigen::Index>> partitions{{0}};
+        if (fit.segments.size() >= 3) {
+            partitions.emplace_back();
+            for (const auto& segment : fit.segments) partitions.back().push_back(segment.first);
+        }
+        auto sums = partitioned_normal_equations(model, values, columns, partitions);
+        const Eigen::MatrixXd& gram = sums.front().gram.front();
+        std::vector<Eigen::Index> kept, kept_positions;
         for (std::size_t c = 0; c < columns.size(); ++c) {
             const Eigen::Index j = columns[c];
             const double width = fit.range_upper[j] - fit.range_lower[j];
             const auto k = static_cast<Eigen::Index>(c);
-            if (j < 4 || std::sqrt(gram(k, k)) * width > 1e-9 * std::sqrt(2.0 * static_cast<double>(n))) kept.push_back(j);
+            if (j < 4 || std::sqrt(gram(k, k)) * width > 1e-9 * std::sqrt(2.0 * static_cast<double>(n))) {
+                kept.push_back(j);
+                kept_positions.push_back(k);
+            }
+        }
+        if (partitions.size() > 1) {
+            auto segment_sums = std::make_shared<SegmentSums>();
+            segment_sums->data = &model.data();
+            segment_sums->samples = n;
+            segment_sums->values = values;
+            segment_sums->columns = columns;
+            segment_sums->starts = partitions.back();
+            segment_sums->sums = std::move(sums.back());
+            fit.segment_sums = std::move(segment_sums);
         }
         if (!kept.empty() && static_cast<Eigen::Index>(kept.size()) < 2 * n) {
             Eigen::VectorXd estimate(static_cast<Eigen::Index>(kept.size()));
@@ -540,7 +560,7 @@ ModelFit assemble(const SteadyStateModel& model, const ModelSpec& spec, const Ei
                 fit.lower[j] = fit.uncertainty.lower[c];
                 fit.upper[j] = fit.uncertainty.upper[c];
             }
-            widen_for_segment_spread(model, values, kept, fit);
+            if (fit.segment_sums) widen_for_segment_spread(values, kept, select_columns(fit.segment_sums->sums, kept_positions), fit);
         }
     }
     if (options.keep_residual) fit.residual = std::move(residual);
@@ -713,12 +733,18 @@ Eigen::MatrixXd leave_one_range_out_steps(const RangeNormalEquations& sums) {
 
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                             const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts) {
+    return std::move(partitioned_normal_equations(model, values, columns, {starts}).front());
+}
+
+std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
+                                                         const std::vector<Eigen::Index>& columns,
+                                                         const std::vector<std::vector<Eigen::Index>>& partitions) {
     const auto& data = model.data();
     const auto p = static_cast<Eigen::Index>(columns.size());
-    // Each block's share, per range it touches; merged in block order so that any thread count
-    // gives the same sums.
+    // Each block's share, per partition and range it touches; merged in block order so that any
+    // thread count gives the same sums.
     struct Share {
-        std::size_t range = 0;
+        std::size_t partition = 0, range = 0;
         Eigen::MatrixXd gram;
         Eigen::VectorXd moment;
         double total = 0.0;
@@ -742,41 +768,67 @@ RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const
             residual_q = data.u_q.segment(first, rows) - a.offset_q.matrix() - a.phi_q.matrix() * values.head<4>();
             auto& out = shares[static_cast<std::size_t>(b)];
             out.clear();
-            // The ranges this block's rows fall in, each a run of consecutive rows.
-            auto range = static_cast<std::size_t>(std::upper_bound(starts.begin(), starts.end(), first) - starts.begin() - 1);
-            for (Eigen::Index k = 0; k < rows;) {
-                const Eigen::Index end =
-                    range + 1 < starts.size() ? std::min(rows, starts[range + 1] - first) : rows;
-                const Eigen::Index count = end - k;
-                // The lower triangle as dot products of contiguous columns: for the few columns here
-                // a general rank update spends more time packing than multiplying.
-                for (Eigen::Index j = 0; j <= p; ++j)
-                    for (Eigen::Index i = j; i <= p; ++i) {
-                        const auto ci = augmented.col(i), cj = augmented.col(j);
-                        product(i, j) = ci.segment(k, count).dot(cj.segment(k, count)) + ci.segment(rows + k, count).dot(cj.segment(rows + k, count));
-                    }
-                Share share;
-                share.range = range;
-                share.gram = product.topLeftCorner(p, p).selfadjointView<Eigen::Lower>();
-                share.moment = product.row(p).head(p).transpose();
-                share.total = product(p, p);
-                out.push_back(std::move(share));
-                k = end;
-                ++range;
+            for (std::size_t partition = 0; partition < partitions.size(); ++partition) {
+                const auto& starts = partitions[partition];
+                // The ranges this block's rows fall in, each a run of consecutive rows.
+                auto range = static_cast<std::size_t>(std::upper_bound(starts.begin(), starts.end(), first) - starts.begin() - 1);
+                for (Eigen::Index k = 0; k < rows;) {
+                    const Eigen::Index end =
+                        range + 1 < starts.size() ? std::min(rows, starts[range + 1] - first) : rows;
+                    const Eigen::Index count = end - k;
+                    // The lower triangle as dot products of contiguous columns: for the few columns here
+                    // a general rank update spends more time packing than multiplying.
+                    for (Eigen::Index j = 0; j <= p; ++j)
+                        for (Eigen::Index i = j; i <= p; ++i) {
+                            const auto ci = augmented.col(i), cj = augmented.col(j);
+                            product(i, j) = ci.segment(k, count).dot(cj.segment(k, count)) + ci.segment(rows + k, count).dot(cj.segment(rows + k, count));
+                        }
+                    Share share;
+                    share.partition = partition;
+                    share.range = range;
+                    share.gram = product.topLeftCorner(p, p).selfadjointView<Eigen::Lower>();
+                    share.moment = product.row(p).head(p).transpose();
+                    share.total = product(p, p);
+                    out.push_back(std::move(share));
+                    k = end;
+                    ++range;
+                }
             }
         }
     });
-    RangeNormalEquations sums;
-    sums.gram.assign(starts.size(), Eigen::MatrixXd::Zero(p, p));
-    sums.moment.assign(starts.size(), Eigen::VectorXd::Zero(p));
-    sums.total.assign(starts.size(), 0.0);
+    std::vector<RangeNormalEquations> all(partitions.size());
+    for (std::size_t partition = 0; partition < partitions.size(); ++partition) {
+        auto& sums = all[partition];
+        const auto ranges = partitions[partition].size();
+        sums.gram.assign(ranges, Eigen::MatrixXd::Zero(p, p));
+        sums.moment.assign(ranges, Eigen::VectorXd::Zero(p));
+        sums.total.assign(ranges, 0.0);
+    }
     for (const auto& block : shares)
         for (const auto& share : block) {
+            auto& sums = all[share.partition];
             sums.gram[share.range] += share.gram;
             sums.moment[share.range] += share.moment;
             sums.total[share.range] += share.total;
         }
-    return sums;
+    return all;
+}
+
+RangeNormalEquations select_columns(const RangeNormalEquations& sums, const std::vector<Eigen::Index>& positions) {
+    const auto p = static_cast<Eigen::Index>(positions.size());
+    RangeNormalEquations out;
+    out.total = sums.total;
+    for (std::size_t r = 0; r < sums.gram.size(); ++r) {
+        Eigen::MatrixXd gram(p, p);
+        Eigen::VectorXd moment(p);
+        for (Eigen::Index a = 0; a < p; ++a) {
+            moment[a] = sums.moment[r][positions[static_cast<std::size_t>(a)]];
+            for (Eigen::Index b = 0; b < p; ++b) gram(a, b) = sums.gram[r](positions[static_cast<std::size_t>(a)], positions[static_cast<std::size_t>(b)]);
+        }
+        out.gram.push_back(std::move(gram));
+        out.moment.push_back(std::move(moment));
+    }
+    return out;
 }
 
 AxisRms axis_rms(const Eigen::VectorXd& residual, Eigen::Index samples) {

@@ -7,6 +7,7 @@
 // Levenberg-Marquardt on the projected residual. Intervals come from the Jacobian of the whole model
 // with the serial-correlation-aware covariance of linear_fit.hpp (docs/effects.md, "Fitting").
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,8 @@ struct SegmentResidual {
     Eigen::Vector2d mean{0.0, 0.0};  // mean residual of u_d and u_q over the segment (V)
 };
 
+struct SegmentSums;
+
 struct ModelFit {
     ModelSpec spec;
     std::vector<std::string> names;      // all parameters: Rs, Ld, Lq, psi_f, then effect.parameter
@@ -73,6 +76,10 @@ struct ModelFit {
     bool spread_widened(Eigen::Index j) const {
         return static_cast<std::size_t>(j) < segment_spread.size() && segment_spread[static_cast<std::size_t>(j)];
     }
+    // The per-segment normal equations its intervals were judged with, of all free parameters at
+    // `values`, kept for its leave-one-segment-out prediction (the same sums); null when no intervals
+    // were computed or the data have fewer than three segments.
+    std::shared_ptr<const SegmentSums> segment_sums;
     std::int64_t evaluations = 0;        // optimiser evaluations
     int polish_iterations = 0;           // Levenberg-Marquardt iterations
     std::string method;                  // how it was fitted, in words
@@ -137,6 +144,24 @@ struct RangeNormalEquations {
 };
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                             const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts);
+// The same for several partitions of the rows (each a `starts`) in one pass: one Jacobian of each
+// block, the sums of each partition the numbers range_normal_equations gives for it alone.
+std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
+                                                         const std::vector<Eigen::Index>& columns,
+                                                         const std::vector<std::vector<Eigen::Index>>& partitions);
+// The sums of some of the columns they were made with (`positions` index those columns): the numbers
+// range_normal_equations gives for those columns alone, since each entry is reduced on its own.
+RangeNormalEquations select_columns(const RangeNormalEquations& sums, const std::vector<Eigen::Index>& positions);
+
+// A fit's per-segment normal equations (ModelFit::segment_sums) and what they are of.
+struct SegmentSums {
+    const void* data = nullptr;  // the Measurement fitted, only compared: sums of other data are not these
+    Eigen::Index samples = 0;
+    Eigen::VectorXd values;
+    std::vector<Eigen::Index> columns;  // all free parameters
+    std::vector<Eigen::Index> starts;   // each segment's first row
+    RangeNormalEquations sums;
+};
 // Each range left out in turn: the Gauss-Newton step (column r for range r) that the other ranges'
 // normal equations ask of the parameters; a parameter they do not determine does not move.
 Eigen::MatrixXd leave_one_range_out_steps(const RangeNormalEquations& sums);
