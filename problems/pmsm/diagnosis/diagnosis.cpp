@@ -18,6 +18,9 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     if (data.temp_magnet) out.columns.push_back("temp_magnet");
     if (data.theta_m) out.columns.push_back("theta_m");
 
+    // The log's operating scale and angle table, made once for the tens of models made of it.
+    const auto shared_tables = SteadyStateModel::hold_shared_tables(data);
+
     // No fit keeps its residual: each is recomputed where it is needed (residual_of), so that a long
     // log's diagnosis holds no row-sized array but the data while it searches.
     FitOptions without_residual = options.fit;

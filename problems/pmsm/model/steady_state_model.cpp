@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <tuple>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -13,26 +14,36 @@
 
 namespace mhb::pmsm {
 
-struct SteadyStateModel::AngleTable {
+// What every model of the same data computes from them alike: their operating scale (a pass over the
+// rows) and the cos and sin of the logged angle (16 bytes a row). Computed once and shared by the
+// models of the same data that exist at the same time, or while a hold_shared_tables handle lives: a
+// diagnosis makes tens of models of one log, several at once.
+struct SteadyStateModel::SharedTables {
+    OperatingScale scale;
     Eigen::ArrayXd cos, sin;
 
-    // The table of `theta` that a model alive now already uses, or a new one. Keyed by the column's
-    // storage: a model's data must not change or go while the model exists, so a live entry is
-    // always of the same numbers.
-    static std::shared_ptr<const AngleTable> of(const Eigen::VectorXd& theta) {
+    // The tables of `data` that a model or handle alive now already holds, or new ones. Keyed by the
+    // storage of its columns: data must not change or go while a model or handle of them exists, so
+    // a live entry is always of the same numbers.
+    static std::shared_ptr<const SharedTables> of(const Measurement& data) {
         static std::mutex mutex;
-        static std::map<std::pair<const double*, Eigen::Index>, std::weak_ptr<const AngleTable>> tables;
+        static std::map<std::tuple<const double*, const double*, Eigen::Index>, std::weak_ptr<const SharedTables>> tables;
         const std::lock_guard lock(mutex);
         std::erase_if(tables, [](const auto& entry) { return entry.second.expired(); });
-        auto& slot = tables[{theta.data(), theta.size()}];
+        auto& slot = tables[{data.i_d.data(), data.theta_e ? data.theta_e->data() : nullptr, data.size()}];
         if (auto table = slot.lock()) return table;
-        auto table = std::make_shared<AngleTable>();
-        table->cos = theta.array().cos();
-        table->sin = theta.array().sin();
+        auto table = std::make_shared<SharedTables>();
+        table->scale = operating_scale_of(data);
+        if (data.theta_e) {
+            table->cos = data.theta_e->array().cos();
+            table->sin = data.theta_e->array().sin();
+        }
         slot = table;
         return table;
     }
 };
+
+std::shared_ptr<const void> SteadyStateModel::hold_shared_tables(const Measurement& data) { return SharedTables::of(data); }
 
 Bounds base_parameter_bounds() {
     Bounds b;
@@ -80,8 +91,8 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
           b.affine[1] = make_affine(tail);
           return b;
       }) {
-    if (data_.theta_e) angle_ = AngleTable::of(*data_.theta_e);
-    const OperatingScale scale = operating_scale_of(data_);
+    tables_ = SharedTables::of(data_);
+    const OperatingScale scale = tables_->scale;
     const Bounds base = base_parameter_bounds();
     std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
     std::vector<double> plausible_lower = lower, plausible_upper = upper;
@@ -154,8 +165,8 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
     s.omega = (speed_ ? *speed_ : data_.omega_e).segment(first, n).array();
     if (data_.theta_e) {
         s.theta = data_.theta_e->segment(first, n).array();
-        s.cos_theta = angle_->cos.segment(first, n);
-        s.sin_theta = angle_->sin.segment(first, n);
+        s.cos_theta = tables_->cos.segment(first, n);
+        s.sin_theta = tables_->sin.segment(first, n);
     }
     if (reads_temp_winding_) s.temp_winding = data_.temp_winding->segment(first, n).array();
     if (reads_temp_magnet_) s.temp_magnet = data_.temp_magnet->segment(first, n).array();

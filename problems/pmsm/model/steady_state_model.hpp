@@ -55,6 +55,11 @@ public:
     SteadyStateModel& operator=(const SteadyStateModel&) = delete;
 
     const Measurement& data() const { return data_; }
+    // Models of the same data share what they compute from them alike (the operating scale, the cos
+    // and sin of the angle) while any of them exists; this handle keeps them for models made while it
+    // lives, so that models made one after another do not each make them again. `data` must neither
+    // change nor go while it is held.
+    static std::shared_ptr<const void> hold_shared_tables(const Measurement& data);
     // Evaluates the model at these speeds instead of the logged omega_e (one per row; nullptr: the
     // logged ones). The dynamic model predicts a step at the speed over the step, not at its first row.
     // `speed` must outlive the model.
@@ -123,10 +128,10 @@ private:
     std::optional<Measurement> owned_;
     const Measurement& data_;
     const Eigen::VectorXd* speed_ = nullptr;  // set_speed
-    // cos and sin of the logged angle, computed once and shared by the models of the same data that
-    // exist at the same time: a diagnosis makes tens of models of one log, several at once.
-    struct AngleTable;
-    std::shared_ptr<const AngleTable> angle_;
+    // The operating scale and the cos and sin of the logged angle, shared with the other models of
+    // the same data (hold_shared_tables).
+    struct SharedTables;
+    std::shared_ptr<const SharedTables> tables_;
     std::vector<std::unique_ptr<Effect>> effects_;
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
     std::vector<std::string> names_;
