@@ -20,10 +20,10 @@
 namespace mhb::pmsm {
 namespace {
 
-// pow(|y|, V) of a block's rows (RowMemo): the Jacobian of a fit predicts a block up to nine times at
-// one exponent (the point, each linear coefficient, the knee's two differences), and pow was most of
-// the effect's cost (a fifth of a long log's diagnosis).
-thread_local RowMemo<double> powers;
+// pow(|y|, V) and the knee's loss of a block's rows (RowMemo): the Jacobian of a fit predicts a block
+// up to nine times at one exponent and knee (the point, each linear coefficient, the other's two
+// differences), and pow was most of the effect's cost (a fifth of a long log's diagnosis).
+thread_local RowMemo<double> powers, knee_losses;
 
 class Saturation final : public Effect {
 public:
@@ -48,10 +48,14 @@ public:
         const Eigen::Index n = s.psi_d.size();
         const double* yv = powers.of(l.v, n, [&](Eigen::Index j) { return l.cross_base(s.i_q[j]); },
                                      [&](double base) { return std::pow(base, l.v); });
+        const double* loss = knee_losses.of(l.knee, n, [&](Eigen::Index j) { return s.i_q[j] / l.base_current; },
+                                            [&](double y) { return CoenergySaturation::knee_loss(y, l.knee); });
+        const double *i_d = s.i_d.data(), *i_q = s.i_q.data();
+        double *psi_d = s.psi_d.data(), *psi_q = s.psi_q.data();
         for (Eigen::Index j = 0; j < n; ++j) {
-            const Complex change = l.flux_change(s.i_d[j], s.i_q[j], yv[j]);
-            s.psi_d[j] += change.real();
-            s.psi_q[j] += change.imag();
+            const Complex change = l.flux_change(i_d[j], i_q[j], yv[j], loss[j]);
+            psi_d[j] += change.real();
+            psi_q[j] += change.imag();
         }
     }
 

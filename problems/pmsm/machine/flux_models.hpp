@@ -95,15 +95,18 @@ struct CoenergySaturation {
         const double r = 1.0 + (u / k) * (u / k);
         return 1.0 - 1.0 / (r * std::sqrt(r));
     }
-    Complex flux_change(double id, double iq) const { return flux_change(id, iq, std::pow(cross_base(iq), v)); }
+    Complex flux_change(double id, double iq) const {
+        return flux_change(id, iq, std::pow(cross_base(iq), v), knee_loss(iq / base_current, knee));
+    }
     // |y|, whose V-th power the cross-saturation takes.
     double cross_base(double iq) const { return std::abs(iq / base_current); }
-    // The same given yv = pow(cross_base(iq), v), for a caller that has it already (the model side
-    // remembers it between the predictions of a Jacobian, effects/saturation.cpp).
-    Complex flux_change(double id, double iq, double yv) const {
+    // The same given yv = pow(cross_base(iq), v) and loss = knee_loss(y, knee), for a caller that has
+    // them already (the model side remembers them between the predictions of a Jacobian,
+    // effects/saturation.cpp); without a square root or pow, a loop over rows of it vectorises.
+    Complex flux_change(double id, double iq, double yv, double loss) const {
         const double x = id / base_current, y = iq / base_current, ay = std::abs(y);
         return {base_flux * (-0.5 * a * y * y - c * yv * ay * ay / (v + 2.0) + e * x * x),
-                base_flux * (-q * knee_loss(y, knee) - (a + c * yv) * x * y)};
+                base_flux * (-q * loss - (a + c * yv) * x * y)};
     }
     // d(Delta psi_d, Delta psi_q)/d(i_d, i_q), {dd, dq, qd, qq}: symmetric, the Hessian of the co-energy change.
     Inductance inductance_change(double id, double iq) const {
