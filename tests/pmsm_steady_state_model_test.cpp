@@ -1,10 +1,12 @@
 // The steady-state model evaluated a block of rows at a time: its split into an offset and one column
 // per base parameter against predictions made one by one, for every library effect and for an effect
 // that does not state how it depends on the base parameters; blocks in parallel give the same numbers
-// on any number of threads; the per-range normal equations against the Jacobian; the search subsample.
+// on any number of threads; the per-range normal equations against the Jacobian; the search subsample;
+// the row memo of expensive per-row functions and the per-segment sums a fit keeps, to the bit.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include <Eigen/Dense>
@@ -14,6 +16,7 @@
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/model/steady_state_model.hpp"
 #include "problems/pmsm/diagnosis/model_checks.hpp"
+#include "problems/pmsm/effects/row_memo.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 
 using namespace mhb;
@@ -296,5 +299,60 @@ TEST_CASE("a search on a subsample finds the optimum a search on all rows finds"
         const auto truth = make_effect(c.effect, c.values);
         if (c.exact)
             for (Eigen::Index j = 0; j < truth->values().size(); ++j) CHECK(sampled.values[4 + j] == Approx(truth->values()[j]).epsilon(1e-6));
+    }
+}
+
+TEST_CASE("a row memo gives the function's own value, computing only rows whose argument or parameter changed bit for bit", "[pmsm][steady_state_model]") {
+    RowMemo<double> memo;
+    int calls = 0;
+    auto compute = [&](double x) {
+        ++calls;
+        return 1.0 / x;  // 1 / -0 and 1 / +0 differ: a memo that took them for one argument would show it
+    };
+    std::vector<double> args{1.0, 2.0, +0.0, 4.0};
+    auto argument = [&](Eigen::Index j) { return args[static_cast<std::size_t>(j)]; };
+    const double* first = memo.of(0.5, 4, argument, compute);
+    CHECK(calls == 4);
+    CHECK(first[1] == 0.5);
+    memo.of(0.5, 4, argument, compute);
+    CHECK(calls == 4);  // all remembered
+    args[2] = -0.0;
+    args[3] = 5.0;
+    const double* changed = memo.of(0.5, 4, argument, compute);
+    CHECK(calls == 6);
+    CHECK(std::signbit(changed[2]));
+    CHECK(changed[3] == 0.2);
+    memo.of(0.25, 4, argument, compute);  // another parameter: its own slot
+    memo.of(0.75, 4, argument, compute);
+    CHECK(calls == 14);
+    memo.of(0.5, 4, argument, compute);  // still one of the three slots
+    CHECK(calls == 14);
+    memo.of(1.0, 4, argument, compute);  // a fourth replaces the least recently used (0.25)
+    memo.of(0.25, 4, argument, compute);
+    CHECK(calls == 22);
+}
+
+TEST_CASE("a fit's kept per-segment sums give its held-out errors and jackknife to the bit", "[pmsm][steady_state_model]") {
+    const Measurement& data = diagnosis_data({{"deadtime", {{"voltage", 0.3}, {"current_band", 0.02}}}});
+    const auto spec = parse_model_spec("base+deadtime+saturation");
+    const auto fit = fit_model(data, spec, FitOptions{});
+    REQUIRE(fit.segment_sums != nullptr);
+    const auto kept = leave_one_segment_out(data, fit);
+    const auto made = leave_one_segment_out(data, spec, fit.values);
+    REQUIRE(kept.size() == made.size());
+    for (std::size_t s = 0; s < kept.size(); ++s) CHECK(kept[s] == made[s]);
+    // Any subset of the columns is the numbers a pass for those columns alone gives.
+    const auto model = make_model(spec, data);
+    const std::vector<Eigen::Index> subset{0, 2, 3, 5, 7};
+    std::vector<Eigen::Index> positions;
+    for (const auto j : subset)
+        positions.push_back(std::find(fit.segment_sums->columns.begin(), fit.segment_sums->columns.end(), j) - fit.segment_sums->columns.begin());
+    for (const auto k : positions) REQUIRE(k < static_cast<Eigen::Index>(fit.segment_sums->columns.size()));
+    const auto selected = select_columns(fit.segment_sums->sums, positions);
+    const auto alone = range_normal_equations(*model, fit.values, subset, fit.segment_sums->starts);
+    for (std::size_t r = 0; r < alone.gram.size(); ++r) {
+        CHECK((selected.gram[r].array() == alone.gram[r].array()).all());
+        CHECK((selected.moment[r].array() == alone.moment[r].array()).all());
+        CHECK(selected.total[r] == alone.total[r]);
     }
 }
