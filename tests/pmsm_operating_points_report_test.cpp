@@ -165,3 +165,32 @@ TEST_CASE("a log with a segment column gets no plot of found operating points", 
     CHECK_FALSE(std::filesystem::exists(report / "operating_points.png"));
     CHECK(mhb::testing::read_file(report / "report.md").find("Operating points found") == std::string::npos);
 }
+
+TEST_CASE("a long record's residual plots are drawn from each run's extremes, a one-row spike kept", "[pmsm][cli][plots]") {
+    // The averaged servo with 2500 rows an operating point: 22 500 rows, beyond the 20 000 a residual
+    // plot shows row by row. Written whole, a million-row record made SVGs of 200 MB each.
+    mhb::testing::TemporaryDirectory dir;
+    auto spec = read_simulation_profile(profile_path("diagnosis_profile.toml"));
+    for (auto& segment : spec.segments) segment.samples = 2500;
+    auto log = simulate(spec).data;
+    REQUIRE(log.size() > 20000);
+    const Eigen::Index spike_row = log.size() / 2 + 17;
+    const double spike = 3.0 * log.u_d.cwiseAbs().maxCoeff();
+    log.u_d[spike_row] = spike;
+    const auto csv = dir.path() / "long.csv", report = dir.path() / "report";
+    write_measurement(csv, log);
+    const auto run = run_mhbench("diagnose --data " + csv.string() + " --model base --report " + report.string(), dir.path() / "log");
+    INFO(run.output);
+    REQUIRE(run.exit_code == 0);
+    for (const char* plot : {"residual_time", "residual_angle"}) {
+        INFO(plot);
+        const auto drawn = data_rows(report / "plot-data" / (std::string(plot) + ".dat"));
+        CHECK(drawn.size() <= 4000);
+        CHECK(drawn.size() >= 2000);
+        // The spike's residual is about the spike itself (the model predicts a few volts there).
+        double highest = -INFINITY;
+        for (const auto& row : drawn) highest = std::max(highest, row[1]);
+        CHECK(highest > 0.5 * spike);
+    }
+    CHECK(mhb::testing::read_file(report / "plot-data" / "residual_time.gp").find("with lines") != std::string::npos);
+}

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -56,6 +58,44 @@ struct PlottedResiduals {
     Eigen::VectorXd model, base;
 };
 
+// Writes x(k) and each series' value at row k, a row per line, for the n rows in order; more than
+// `most` rows as each of `columns` runs of consecutive rows in two lines: every series' lowest and
+// highest value of the run, in the order they occur, at the run's first and last x. A line or a
+// band of points through them passes every row's value, so a spike of one row keeps its full height
+// where thinning would drop it, and a million-row log's plot stays a few thousand points (an SVG of
+// every row of a million would be hundreds of MB). Returns whether it wrote extremes.
+template <class X, class Series>
+bool write_rows_or_extremes(std::ostream& out, Eigen::Index n, Eigen::Index most, Eigen::Index columns, X x, const std::vector<Series>& series) {
+    const bool extremes = n > most;
+    if (!extremes) {
+        for (Eigen::Index k = 0; k < n; ++k) {
+            out << fmt::format("{:.9g}", x(k));
+            for (const auto& y : series) out << fmt::format(" {:.6g}", y(k));
+            out << "\n";
+        }
+        return false;
+    }
+    for (Eigen::Index b = 0; b < columns; ++b) {
+        const Eigen::Index first = b * n / columns, end = (b + 1) * n / columns;
+        std::string early = fmt::format("{:.9g}", x(first)), late = fmt::format("{:.9g}", x(end - 1));
+        for (const auto& y : series) {
+            Eigen::Index low = first, high = first;
+            for (Eigen::Index k = first + 1; k < end; ++k) {
+                if (y(k) < y(low)) low = k;
+                if (y(k) > y(high)) high = k;
+            }
+            early += fmt::format(" {:.6g}", y(std::min(low, high)));
+            late += fmt::format(" {:.6g}", y(std::max(low, high)));
+        }
+        out << early << "\n" << late << "\n";
+    }
+    return true;
+}
+
+// A record's residual plot shows every row up to this many (an SVG of about 10 MB at most); a longer
+// one its extremes over this many runs of rows.
+constexpr Eigen::Index residual_plot_rows = 20000, residual_plot_columns = 2000;
+
 std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measurement& data, const PlottedResiduals& residuals) {
     const Eigen::Index n = data.size();
     const bool before = d.build_up.size() > 1;
@@ -64,22 +104,33 @@ std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measuremen
     const Eigen::VectorXd& base_residual = residuals.base;
     const fs::path file = plot.data("residual_time");
     std::ofstream out(file);
-    out << "# x r_d r_q before_r_d before_r_q (V)\n";
-    for (Eigen::Index k = 0; k < n; ++k)
-        out << fmt::format("{:.9g} {:.6g} {:.6g} {:.6g} {:.6g}\n", data.t ? (*data.t)[k] : static_cast<double>(k), model_residual[k],
-                           model_residual[n + k], base_residual[k], base_residual[n + k]);
+    const bool extremes = n > residual_plot_rows;
+    out << (extremes ? fmt::format("# x r_d r_q before_r_d before_r_q (V): each of {} runs of rows as its lowest and highest values\n",
+                                   residual_plot_columns)
+                     : std::string("# x r_d r_q before_r_d before_r_q (V)\n"));
+    using Row = std::function<double(Eigen::Index)>;
+    write_rows_or_extremes(out, n, residual_plot_rows, residual_plot_columns,
+                           [&](Eigen::Index k) { return data.t ? (*data.t)[k] : static_cast<double>(k); },
+                           std::vector<Row>{[&](Eigen::Index k) { return model_residual[k]; }, [&](Eigen::Index k) { return model_residual[n + k]; },
+                                            [&](Eigen::Index k) { return base_residual[k]; }, [&](Eigen::Index k) { return base_residual[n + k]; }});
     out.close();
-    std::string body = fmt::format("set multiplot layout 2,1 title {} noenhanced\nset grid\nset key top right\n",
-                                   gnuplot_quote("Residual (logged minus predicted voltage) through the record; dotted lines: segment changes"));
+    const std::string title = std::string("Residual (logged minus predicted voltage) through the record; dotted lines: segment changes") +
+                              (extremes ? fmt::format("; band: the extremes of each run of about {} of the {} rows",
+                                                      (n + residual_plot_columns - 1) / residual_plot_columns, n)
+                                        : std::string());
+    // Extremes drawn as points would show two bands with nothing between; a line through them,
+    // lowest to highest run by run, fills the band the rows span.
+    const std::string style = extremes ? "with lines lw 1" : "with points pt 7 ps 0.25";
+    std::string body = fmt::format("set multiplot layout 2,1 title {} noenhanced\nset grid\nset key top right\n", gnuplot_quote(title));
     body += fmt::format("set xlabel {}\n", gnuplot_quote(data.t ? "t (s)" : "sample"));
     for (int a = 0; a < 2; ++a) {
         body += segment_lines(d, data);
         body += fmt::format("set ylabel {} noenhanced\n", gnuplot_quote(std::string(axis_name(a)) + " residual (V)"));
         std::string plots;
         if (before)
-            plots += fmt::format("{} using 1:{} with points pt 7 ps 0.25 lc rgb '{}' title {} noenhanced, ", gnuplot_quote(file.string()), 4 + a,
+            plots += fmt::format("{} using 1:{} {} lc rgb '{}' title {} noenhanced, ", gnuplot_quote(file.string()), 4 + a, style,
                                  before_colour, gnuplot_quote(fmt::format("base: {} mV rms", mv(a == 0 ? base.rms.d : base.rms.q))));
-        plots += fmt::format("{} using 1:{} with points pt 7 ps 0.25 lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()), 2 + a,
+        plots += fmt::format("{} using 1:{} {} lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()), 2 + a, style,
                              model_colour, gnuplot_quote(fmt::format("{}: {} mV rms", d.model.spec.text(), mv(a == 0 ? d.model.rms.d : d.model.rms.q))));
         body += "plot " + plots + "\nunset arrow\n";
     }
@@ -105,13 +156,35 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
             model_dev.segment(a * n + s.first, s.rows).array() -= s.model.mean[a];
             base_dev.segment(a * n + s.first, s.rows).array() -= s.before.mean[a];
         }
+    // A longer record: each of residual_plot_columns columns of angle as its lowest and highest
+    // value of each series, at the column's centre (the bins' means below stay the mean of all rows).
+    const bool extremes = n > residual_plot_rows;
+    const Eigen::Index angle_columns = residual_plot_columns;
+    Eigen::ArrayXXd lowest, highest;
+    if (extremes) {
+        lowest = Eigen::ArrayXXd::Constant(angle_columns, 4, std::numeric_limits<double>::infinity());
+        highest = Eigen::ArrayXXd::Constant(angle_columns, 4, -std::numeric_limits<double>::infinity());
+    }
     for (Eigen::Index k = 0; k < n; ++k) {
         const double deg = wrap_angle((*data.theta_e)[k]) * 180.0 / std::numbers::pi;
         const Eigen::Array4d r(model_dev[k], model_dev[n + k], base_dev[k], base_dev[n + k]);
-        out << fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n", deg, r[0], r[1], r[2], r[3]);
+        if (extremes) {
+            const Eigen::Index c = std::clamp(static_cast<Eigen::Index>((deg + 180.0) / 360.0 * static_cast<double>(angle_columns)), Eigen::Index{0},
+                                              angle_columns - 1);
+            lowest.row(c) = lowest.row(c).min(r.transpose());
+            highest.row(c) = highest.row(c).max(r.transpose());
+        } else {
+            out << fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n", deg, r[0], r[1], r[2], r[3]);
+        }
         const int b = std::clamp(static_cast<int>((deg + 180.0) / 360.0 * count), 0, count - 1);
         sum.row(b) += r.transpose();
         hits[b] += 1.0;
+    }
+    for (Eigen::Index c = 0; extremes && c < angle_columns; ++c) {
+        if (!std::isfinite(lowest(c, 0))) continue;
+        const double centre = -180.0 + (static_cast<double>(c) + 0.5) * 360.0 / static_cast<double>(angle_columns);
+        for (const auto* edge : {&lowest, &highest})
+            out << fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n", centre, (*edge)(c, 0), (*edge)(c, 1), (*edge)(c, 2), (*edge)(c, 3));
     }
     out.close();
     std::ofstream mean(bins);
@@ -124,16 +197,21 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     }
     mean.close();
     std::string body = fmt::format("set multiplot layout 2,1 title {} noenhanced\nset grid\nset key top right\nset xrange [-180:180]\nset xtics 60\n",
-                                   gnuplot_quote("Residual minus its segment mean against the electrical angle (dots: samples, line: mean in 5-degree bins)"));
+                                   gnuplot_quote(extremes ? fmt::format("Residual minus its segment mean against the electrical angle (band: the extremes "
+                                                                        "of the {} rows in each of {} columns of angle; line: mean in 5-degree bins)",
+                                                                        n, angle_columns)
+                                                          : std::string("Residual minus its segment mean against the electrical angle (dots: samples, line: "
+                                                                        "mean in 5-degree bins)")));
+    const std::string style = extremes ? "with lines lw 1" : "with points pt 7 ps 0.2";
     body += "set xlabel 'electrical angle theta_e (degrees)' noenhanced\n";
     for (int a = 0; a < 2; ++a) {
         body += fmt::format("set ylabel {} noenhanced\n", gnuplot_quote(std::string(axis_name(a)) + " residual - segment mean (V)"));
         std::string plots;
         if (before)
-            plots += fmt::format("{} using 1:{} with points pt 7 ps 0.2 lc rgb '#dddddd' notitle, {} using 1:{} with lines lw 2 lc rgb '#888888' title 'base' noenhanced, ",
-                                 gnuplot_quote(samples.string()), 4 + a, gnuplot_quote(bins.string()), 4 + a);
-        plots += fmt::format("{} using 1:{} with points pt 7 ps 0.2 lc rgb '#9ec5e8' notitle, {} using 1:{} with lines lw 2 lc rgb '{}' title {} noenhanced",
-                             gnuplot_quote(samples.string()), 2 + a, gnuplot_quote(bins.string()), 2 + a, model_colour,
+            plots += fmt::format("{} using 1:{} {} lc rgb '#dddddd' notitle, {} using 1:{} with lines lw 2 lc rgb '#888888' title 'base' noenhanced, ",
+                                 gnuplot_quote(samples.string()), 4 + a, style, gnuplot_quote(bins.string()), 4 + a);
+        plots += fmt::format("{} using 1:{} {} lc rgb '#9ec5e8' notitle, {} using 1:{} with lines lw 2 lc rgb '{}' title {} noenhanced",
+                             gnuplot_quote(samples.string()), 2 + a, style, gnuplot_quote(bins.string()), 2 + a, model_colour,
                              gnuplot_quote(d.model.spec.text()));
         body += "plot " + plots + "\n";
     }
@@ -321,27 +399,9 @@ std::string operating_points_plot(Plotter& plot, const FoundOperatingPoints& fou
                                     "channel in the order they occur (at its first and last row's x)\n",
                                     log_plot_columns)
                       : std::string("# x i_d i_q omega_e u_d u_q: every row\n"));
-    if (!decimated) {
-        for (Eigen::Index k = 0; k < n; ++k) {
-            out << fmt::format("{:.9g}", x(k));
-            for (const auto* c : channels) out << fmt::format(" {:.6g}", (*c)[k]);
-            out << "\n";
-        }
-    } else {
-        for (Eigen::Index b = 0; b < log_plot_columns; ++b) {
-            const Eigen::Index first = b * n / log_plot_columns, end = (b + 1) * n / log_plot_columns;
-            std::string early = fmt::format("{:.9g}", x(first)), late = fmt::format("{:.9g}", x(end - 1));
-            for (const auto* c : channels) {
-                Eigen::Index low = 0, high = 0;
-                const auto column = c->segment(first, end - first);
-                column.minCoeff(&low);
-                column.maxCoeff(&high);
-                early += fmt::format(" {:.6g}", column[std::min(low, high)]);
-                late += fmt::format(" {:.6g}", column[std::max(low, high)]);
-            }
-            out << early << "\n" << late << "\n";
-        }
-    }
+    std::vector<std::function<double(Eigen::Index)>> series;
+    for (const auto* c : channels) series.emplace_back([c](Eigen::Index k) { return (*c)[k]; });
+    write_rows_or_extremes(out, n, 2 * log_plot_columns, log_plot_columns, x, series);
     out.close();
     const fs::path windows = plot.data("operating_points_windows");
     std::ofstream listed(windows);
