@@ -93,3 +93,20 @@ def test_bad_data_is_refused_naming_the_column(simulated):
         mhbench.pmsm.fit(data, model="base+no_such_effect")
     with pytest.raises(TypeError, match="^data: "):
         mhbench.pmsm.fit(42)
+
+
+def test_a_raw_log_gets_its_operating_points_found_as_the_command_line_finds_them(tmp_path, run_cli):
+    # A bench log without a segment column (the tutorial's, section 7): fit and diagnose find its steady
+    # windows as `mhbench fit` and `diagnose` do, say so in their report, and the diagnosis report
+    # plots the log with the windows shaded.
+    profile = pathlib.Path(os.environ["MHBENCH_SOURCE_DIR"]) / "experiments/pmsm/raw_bench_log.toml"
+    run_cli("simulate", profile, "--out", tmp_path / "bench.csv")
+    run_cli("fit", "--data", tmp_path / "bench.csv", "--model", "base", "--json", tmp_path / "fit.json")
+    expected = json.loads((tmp_path / "fit.json").read_text())
+    assert expected["operating_points"]["found_automatically"]
+    fitted = mhbench.pmsm.fit(tmp_path / "bench.csv", model="base")
+    assert fitted.report["operating_points"] == expected["operating_points"]
+    assert fitted.parameters == {name: entry["value"] for name, entry in expected["parameters"].items()}
+    diagnosis = mhbench.pmsm.diagnose(tmp_path / "bench.csv", model="base", report=tmp_path / "report")
+    assert diagnosis.report["operating_points"] == expected["operating_points"]
+    assert (tmp_path / "report" / "operating_points.png").is_file()

@@ -62,7 +62,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;
-            if (found) out["operating_points"] = operating_points_json(*found);
+            if (found) out["operating_points"] = pmsm::operating_points_json(*found);
             replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);
         }

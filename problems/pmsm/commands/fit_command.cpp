@@ -12,6 +12,7 @@
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/fit/dynamic_fit.hpp"
+#include "problems/pmsm/report/diagnosis_report.hpp"
 #include "problems/pmsm/report/fit_report.hpp"
 
 namespace mhb::cli {
@@ -55,7 +56,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         if (!o->json.empty()) {
             auto out = pmsm::fit_json(fit);
             out["data"] = o->data;
-            if (found) out["operating_points"] = operating_points_json(*found);
+            if (found) out["operating_points"] = pmsm::operating_points_json(*found);
             replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);
         }

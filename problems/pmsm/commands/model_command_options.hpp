@@ -119,21 +119,6 @@ inline std::optional<pmsm::OperatingPoints> find_operating_points_option(const M
     return points;
 }
 
-// The operating points as JSON, for fit's and diagnose's output.
-inline nlohmann::ordered_json operating_points_json(const pmsm::OperatingPoints& p) {
-    nlohmann::ordered_json windows = nlohmann::ordered_json::array();
-    for (const auto& w : p.windows) windows.push_back({{"first_row", w.first + 1}, {"rows", w.rows}});
-    return {{"found_automatically", true},
-            {"method", "moving-sum change-point test on i_d, i_q, omega_e (docs/diagnosis.md)"},
-            {"bandwidth_rows", p.bandwidth},
-            {"min_rows", p.min_rows},
-            {"false_alarm", p.false_alarm},
-            {"threshold", p.threshold},
-            {"rows", p.rows},
-            {"transient_rows", p.transient_rows},
-            {"steady_windows", windows}};
-}
-
 // `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.
 inline std::string shell_word(const std::string& text) {
     const bool bare = !text.empty() && text.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"

@@ -111,6 +111,15 @@ Measurement measurement_of(py::handle data, double settle, py::handle columns, i
     return m;
 }
 
+// A log without a segment column gets its steady windows as segments, the transients between them
+// dropped, as `mhbench fit` and `diagnose` do (docs/diagnosis.md, section 7); a given column wins.
+std::optional<OperatingPoints> found_operating_points(Measurement& m) {
+    if (m.has_segments()) return std::nullopt;
+    auto points = find_operating_points(m);
+    m = select_operating_points(std::move(m), points);
+    return points;
+}
+
 FitOptions fit_options_of(const std::string& optimizer, py::handle evaluations, py::handle seed, py::handle search_rows) {
     OptimizerRegistry::instance().at(optimizer, "optimizer");
     FitOptions options;
@@ -151,14 +160,21 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
              double settle, py::handle search_rows, py::handle columns, int pole_pairs, py::handle threads) {
     const auto spec = parse_model_spec(model);
     const auto options = fit_options_of(optimizer, evaluations, seed, search_rows);
-    const auto measurement = measurement_of(data, settle, columns, pole_pairs);
+    auto measurement = measurement_of(data, settle, columns, pole_pairs);
+    const auto found = found_operating_points(measurement);
     const auto limit = thread_limit(threads);
     ModelFit result;
     {
         py::gil_scoped_release release;
         result = fit_model(measurement, spec, options);
     }
-    return fit_result(measurement, result);
+    py::dict out = fit_result(measurement, result);
+    // As `mhbench fit --json` writes it.
+    if (found) {
+        py::dict written = out["report"];
+        written["operating_points"] = json_object(operating_points_json(*found));
+    }
+    return out;
 }
 
 py::dict diagnose(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations,
@@ -168,7 +184,11 @@ py::dict diagnose(py::handle data, const std::string& model, const std::string& 
     DiagnosisOptions options;
     options.fit = fit_options_of(optimizer, evaluations, seed, search_rows);
     options.pole_pairs = pole_pairs;
-    const auto measurement = measurement_of(data, settle, columns, pole_pairs);
+    auto measurement = measurement_of(data, settle, columns, pole_pairs);
+    // The report shows a raw log as read, with the windows found in it.
+    std::optional<Measurement> raw_log;
+    if (!report.is_none() && !measurement.has_segments()) raw_log = measurement;
+    const auto found = found_operating_points(measurement);
     const auto limit = thread_limit(threads);
     std::optional<Diagnosis> diagnosis;
     {
@@ -180,9 +200,15 @@ py::dict diagnose(py::handle data, const std::string& model, const std::string& 
     out["recommended"] = diagnosis->recommended.text();
     out["report"] = json_object(diagnosis_json(*diagnosis));
     out["text"] = diagnosis_text(*diagnosis);
+    if (found) {
+        py::dict written = out["report"];
+        written["operating_points"] = json_object(operating_points_json(*found));
+    }
     if (!report.is_none()) {
         const std::string source = is_path(data) ? path_text(data) : std::string("<dict>");
-        const auto written = write_diagnosis_report(path_text(report), measurement, *diagnosis, source);
+        std::optional<FoundOperatingPoints> shown;
+        if (found && raw_log) shown.emplace(FoundOperatingPoints{*raw_log, *found});
+        const auto written = write_diagnosis_report(path_text(report), measurement, *diagnosis, source, "", shown ? &*shown : nullptr);
         out["report_html"] = written.html.string();
         out["report_markdown"] = written.markdown.string();
         out["report_notes"] = written.notes;

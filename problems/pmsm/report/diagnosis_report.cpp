@@ -280,6 +280,20 @@ void add_doubts(Document& doc, const Diagnosis& d) {
 
 }  // namespace
 
+nlohmann::ordered_json operating_points_json(const OperatingPoints& p) {
+    nlohmann::ordered_json windows = nlohmann::ordered_json::array();
+    for (const auto& w : p.windows) windows.push_back({{"first_row", w.first + 1}, {"rows", w.rows}});
+    return {{"found_automatically", true},
+            {"method", "moving-sum change-point test on i_d, i_q, omega_e (docs/diagnosis.md)"},
+            {"bandwidth_rows", p.bandwidth},
+            {"min_rows", p.min_rows},
+            {"false_alarm", p.false_alarm},
+            {"threshold", p.threshold},
+            {"rows", p.rows},
+            {"transient_rows", p.transient_rows},
+            {"steady_windows", windows}};
+}
+
 ReportOutcome write_diagnosis_report(const fs::path& directory, const Measurement& data, const Diagnosis& d, const std::string& data_path,
                                      const std::string& data_options, const FoundOperatingPoints* found) {
     ReportOutcome outcome;

@@ -28,6 +28,10 @@ struct ReportOutcome {
     std::vector<std::string> notes;             // e.g. gnuplot missing
 };
 
+// The operating points found in a log without a segment column, as JSON (fit's and diagnose's
+// `operating_points`, on the command line and in Python).
+nlohmann::ordered_json operating_points_json(const OperatingPoints& points);
+
 // A log without a segment column as it was read, and the steady windows found in it, which became the
 // segments of the measurement diagnosed.
 struct FoundOperatingPoints {
