@@ -93,6 +93,7 @@ TEST_CASE("one effect found: what it is, its values and the evidence against the
     d.path.push_back(step(fit_of("base+voltage_offset", 0.05, {{"voltage_offset.u_d0", 0.3}}), StepKind::Added, "voltage_offset"));
     d.path.back().at_noise_floor = true;
     d.missing_effect_found = true;
+    d.recommended_step = d.path.size() - 1;
     d.winner = "voltage_offset";
     const auto f = findings_of(d, LackOfFit{}, 0.25);
     CHECK(says(f, "Missing effect: voltage_offset (its fit: voltage_offset.u_d0 = 0.3 V). Adding it lowers the residual to 0.05 V rms; "
@@ -120,6 +121,7 @@ TEST_CASE("one effect found where the table divides its evidence by an overdispe
     d.path.back().delta_bic = -87.6;
     d.path.back().at_noise_floor = true;
     d.missing_effect_found = true;
+    d.recommended_step = d.path.size() - 1;
     d.winner = "saturation";
     const auto f = findings_of(d, LackOfFit{}, 0.25);
     CHECK(std::any_of(f.begin(), f.end(), [](const std::string& s) {
@@ -154,6 +156,7 @@ TEST_CASE("a set found step by step, with an effect pruned on the way", "[pmsm][
     d.path.back().structure = 0.1;
     d.pruned = {"delay"};
     d.missing_effect_found = true;
+    d.recommended_step = d.path.size() - 1;
     const auto f = findings_of(d, LackOfFit{}, 0.25);
     const auto missing = std::find_if(f.begin(), f.end(), [](const auto& s) { return s.rfind("Missing effects: deadtime and encoder_offset together", 0) == 0; });
     REQUIRE(missing != f.end());
@@ -219,12 +222,14 @@ TEST_CASE("a partial candidate's sentence agrees with the recommended path", "[p
     set.path.back().at_noise_floor = true;
     set.recommended = set.path.back().fit.spec;
     set.missing_effect_found = true;
+    set.recommended_step = set.path.size() - 1;
     f = findings_of(set, LackOfFit{}, 0.25);
     CHECK(says(f, alone + ", and the search over sets of effects added it."));
 
     // The recommended set holds only the partial effect itself: the other one was not added.
     Diagnosis alone_set = set;
     alone_set.path.erase(alone_set.path.begin() + 1);
+    alone_set.recommended_step = alone_set.path.size() - 1;
     alone_set.recommended = parse_model_spec("base+psi_thermal");
     f = findings_of(alone_set, LackOfFit{}, 0.25);
     CHECK(says(f, alone + "."));

@@ -178,3 +178,27 @@ TEST_CASE("an effect turned down for its held-out prediction is named with what 
                       [](const std::string& f) { return f.rfind("saturation would explain", 0) == 0; }));
     CHECK(diagnosis_json(d).at("unpredictive_additions").size() == 1);
 }
+
+TEST_CASE("an implausible addition after a complete plausible set does not undo it (an example: one drive)", "[pmsm][diagnosis][search]") {
+    // Seed 4 of the 5 kW raw-log study's flux harmonics: base+flux_harmonic reaches the noise floor
+    // with plausible values, then the search adds saturation at the floor with an incremental
+    // inductance no machine has. The recommendation is the plausible set, and the finding says why
+    // the addition is left out; before, the whole answer was "base, not in the library".
+    auto drive = read_simulation_profile(std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_5kw_profile.toml");
+    drive.seed = 4;
+    drive.logging.transients = true;
+    drive.logging.segment = false;
+    drive.device->rotor_flux.harmonics = {{5, 0.01, 0.5}, {7, 0.005, -1.0}};
+    Measurement data = simulate(drive).data;
+    data = select_operating_points(std::move(data), find_operating_points(data));
+    DiagnosisOptions options;
+    options.pole_pairs = drive.motor.pole_pairs;
+    const Diagnosis d = diagnose(data, parse_model_spec("base"), options);
+    REQUIRE(d.path.size() == 3);
+    REQUIRE_FALSE(d.path.back().plausible);
+    CHECK(d.recommended_step == 1);
+    CHECK(d.recommended.text() == "base+flux_harmonic");
+    CHECK_FALSE(d.not_in_library);
+    CHECK(std::any_of(d.findings.begin(), d.findings.end(),
+                      [](const std::string& f) { return f.rfind("The search then added saturation", 0) == 0; }));
+}

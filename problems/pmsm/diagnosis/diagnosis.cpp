@@ -63,13 +63,14 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.tie_experiments = std::move(r.tie_experiments);
     out.not_in_library = r.not_in_library;
     out.incomplete = r.incomplete;
-    const ModelFit& recommended = out.recommended.text() == out.model.spec.text() ? out.model : out.path.back().fit;
-    const PathStep& last = out.path.back();
+    out.recommended_step = r.step;
+    const PathStep& last = out.path[r.step];
+    const ModelFit& recommended = out.recommended.text() == out.model.spec.text() ? out.model : last.fit;
     out.law_error_beyond_noise = &recommended == &last.fit && last.at_noise_floor && last.structure >= options.floor_tolerance;
     out.detection_limits = detection_limits(design, data.size(), recommended, screen.library, out.noise);
-    for (const auto& h : trace.left.back().mechanical_harmonics)
+    for (const auto& h : trace.left[r.step].mechanical_harmonics)
         if (h.significant) out.mechanical_left.push_back(h);
-    out.findings = findings_of(out, trace.left.back(), options.floor_tolerance);
+    out.findings = findings_of(out, trace.left[r.step], options.floor_tolerance);
     return out;
 }
 

@@ -249,6 +249,9 @@ struct Diagnosis {
     // again because the others explain them, and the recommendation: the last set when it reaches
     // the noise floor with plausible values, the model diagnosed otherwise.
     std::vector<PathStep> path;
+    // The step of the path the recommendation was judged on: the last, or the latest plausible set
+    // before a run of implausible additions (docs/diagnosis.md, section 2).
+    std::size_t recommended_step = 0;
     std::vector<std::string> pruned;
     // The additions the search's last round turned down only for their held-out prediction, when
     // that round added nothing: what a log with more operating points could decide.

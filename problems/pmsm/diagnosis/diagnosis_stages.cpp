@@ -167,7 +167,15 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
 Recommendation recommend(const ModelSpec& spec, const SetSearch& search, const PathTrace& trace, const LackOfFit& model_left,
                          const Measurement& design, const std::vector<Proposal>& proposals) {
     Recommendation r;
-    const PathStep& last = trace.path.back();
+    // An addition that makes the set implausible does not undo the set it was added to: the
+    // latest plausible set before a run of implausible additions is judged instead (an effect
+    // added at the noise floor to take a sliver, with values no machine has, seen on the 5 kW raw
+    // logs' flux harmonics and the 100 kW dead time with winding heating). Not across pruning,
+    // which already judged the larger sets.
+    r.step = trace.path.size() - 1;
+    while (r.step > 1 && !trace.path[r.step].plausible && trace.path[r.step].kind == StepKind::Added && search.tie.empty()) --r.step;
+    if (!trace.path[r.step].plausible) r.step = trace.path.size() - 1;
+    const PathStep& last = trace.path[r.step];
     // A search that stopped on a tie found what it could: the rest is one of the tied effects.
     const bool plausible = trace.path.size() > 1 && last.plausible;
     const bool complete = plausible && (last.at_noise_floor || !search.tie.empty());

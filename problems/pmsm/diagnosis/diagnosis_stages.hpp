@@ -83,6 +83,9 @@ struct Recommendation {
     bool not_in_library = false;
     // Recommended without reaching the noise floor: something else is missing too.
     bool incomplete = false;
+    // The step of the path the recommendation is judged on: the last, or, when the last additions
+    // are implausible, the latest plausible set before them.
+    std::size_t step = 0;
 };
 // The last set of the path when it is plausible and reaches the noise floor (or the search stopped on
 // a tie), or explains most of the model's excess residual (evidence::most_of_the_excess; then

@@ -100,7 +100,7 @@ std::string structure_at_floor(const PathStep& last, double floor_tolerance) {
 // The effects the search added: one, or a set step by step; what structure they leave.
 void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std::string>& f) {
     const auto& m = d.model;
-    const PathStep& last = d.path.back();
+    const PathStep& last = d.path[d.recommended_step];
     std::vector<std::string> added;
     for (const auto& e : last.fit.spec.effects)
         if (!m.spec.contains(e.name)) added.push_back(e.name);
@@ -125,7 +125,7 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
                                 added.front(), effect_values(last.fit, m.values.size()), last.fit.rms.total, evidence));
     } else {
         std::string steps;
-        for (std::size_t k = 1; k < d.path.size(); ++k)
+        for (std::size_t k = 1; k <= d.recommended_step; ++k)
             steps += fmt::format("{} {} {:.4g} V (dBIC {:.1f})", k == 1 ? "" : ",", d.path[k].change(), d.path[k].fit.rms.total, d.path[k].delta_bic);
         f.push_back(fmt::format("Missing effects: {} together (recommended model {}; their fit: {}). The residual falls from {:.4g} V rms "
                                 "step by step:{}, {} the noise floor of {:.3g} V.",
@@ -140,6 +140,12 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
                                 last.signature.empty() ? std::string("structure beyond the noise") : last.signature));
     else if (const std::string rest = structure_at_floor(last, floor_tolerance); !rest.empty())
         f.push_back(rest);
+    // What the search added after the recommended set and why it is not recommended with it.
+    for (std::size_t k = d.recommended_step + 1; k < d.path.size(); ++k)
+        f.push_back(fmt::format("The search then added {} ({:.4g} V rms, dBIC {:.1f}), but it takes implausible values ({}): it is not "
+                                "recommended{}.",
+                                d.path[k].effect, d.path[k].fit.rms.total, d.path[k].delta_bic, d.path[k].implausible.empty() ? "" : d.path[k].implausible.front(),
+                                last.at_noise_floor ? fmt::format(", and {} reaches the noise floor without it", last.fit.spec.text()) : std::string()));
     if (d.winner) {
         const Candidate* w = candidate_of(d, *d.winner);
         if (w && w->identifiability == Identifiability::MostlyAbsorbed)
@@ -187,7 +193,7 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double 
 // floor's tolerance, where the verdict says the residual is at the floor (not "not in the
 // library"), they are named as small.
 void mechanical_findings(const Diagnosis& d, double floor_tolerance, std::vector<std::string>& f) {
-    const bool at_floor = !d.not_in_library && !d.path.empty() && d.path.back().at_noise_floor;
+    const bool at_floor = !d.not_in_library && !d.path.empty() && d.path[d.recommended_step].at_noise_floor;
     for (const auto& h : d.mechanical_left) {
         if (!h.significant) continue;
         const int axis = h.amplitude[1] >= h.amplitude[0] ? 1 : 0;

@@ -75,6 +75,7 @@ json diagnosis_json(const Diagnosis& d) {
         if (!step.allowance.source.empty()) path.back()["law_allowance"] = {{"law", step.allowance.source}, {"power", step.allowance.power}};
     }
     out["path"] = path;
+    out["recommended_step"] = d.recommended_step;
     out["pruned"] = d.pruned;
     auto unpredictive = nlohmann::ordered_json::array();
     for (const auto& u : d.unpredictive)
