@@ -112,10 +112,8 @@ inline pmsm::Measurement read_data_option(const ModelCommandOptions& o, const pm
 // segments and the transients between them are dropped, so that everything that needs operating
 // points has them. A given segment column always wins. Says what was found on stdout.
 inline std::optional<pmsm::OperatingPoints> find_operating_points_option(const ModelCommandOptions& o, pmsm::Measurement& data) {
-    if (data.has_segments()) return std::nullopt;
-    auto points = pmsm::find_operating_points(data, o.steady);
-    data = pmsm::select_operating_points(std::move(data), points);
-    std::printf("%s\n\n", pmsm::operating_points_summary(points).c_str());
+    auto points = pmsm::segment_at_operating_points(data, o.steady);
+    if (points) std::printf("%s\n\n", pmsm::operating_points_summary(*points).c_str());
     return points;
 }
 

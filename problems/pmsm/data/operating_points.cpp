@@ -210,6 +210,13 @@ Measurement select_operating_points(Measurement&& m, const OperatingPoints& poin
     return steady;
 }
 
+std::optional<OperatingPoints> segment_at_operating_points(Measurement& m, const OperatingPointOptions& options) {
+    if (m.has_segments()) return std::nullopt;
+    auto points = find_operating_points(m, options);
+    m = select_operating_points(std::move(m), points);
+    return points;
+}
+
 std::string operating_points_summary(const OperatingPoints& points) {
     return fmt::format("operating points: found automatically (the log has no segment column): {} steady window{}, "
                        "{} of {} rows dropped as transient (moving-sum test on {}, {} rows a side, false-alarm "

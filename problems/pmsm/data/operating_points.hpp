@@ -3,6 +3,7 @@
 // steps, ramps and settling of a bench run, found as the stretches where no level change of the
 // measured currents and speed can be told from their noise (a moving-sum change-point test,
 // docs/diagnosis.md, "Operating points found in a raw log").
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,11 @@ OperatingPoints find_operating_points(const Measurement& m, const OperatingPoint
 // The rows of the windows, each window a segment labelled "steady1", "steady2", ... InputError
 // naming the file when no window was found.
 Measurement select_operating_points(Measurement&& m, const OperatingPoints& points);
+
+// What fit and diagnose (command line and Python) do with a log: without a segment column its steady
+// windows are found and become its segments, the rows between them dropped; a given column wins
+// (nothing found, nullopt).
+std::optional<OperatingPoints> segment_at_operating_points(Measurement& m, const OperatingPointOptions& options = {});
 
 // One line for fit's and diagnose's output: how many windows, how many rows dropped, the method.
 std::string operating_points_summary(const OperatingPoints& points);

@@ -111,15 +111,6 @@ Measurement measurement_of(py::handle data, double settle, py::handle columns, i
     return m;
 }
 
-// A log without a segment column gets its steady windows as segments, the transients between them
-// dropped, as `mhbench fit` and `diagnose` do (docs/diagnosis.md, section 7); a given column wins.
-std::optional<OperatingPoints> found_operating_points(Measurement& m) {
-    if (m.has_segments()) return std::nullopt;
-    auto points = find_operating_points(m);
-    m = select_operating_points(std::move(m), points);
-    return points;
-}
-
 FitOptions fit_options_of(const std::string& optimizer, py::handle evaluations, py::handle seed, py::handle search_rows) {
     OptimizerRegistry::instance().at(optimizer, "optimizer");
     FitOptions options;
@@ -161,7 +152,7 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
     const auto spec = parse_model_spec(model);
     const auto options = fit_options_of(optimizer, evaluations, seed, search_rows);
     auto measurement = measurement_of(data, settle, columns, pole_pairs);
-    const auto found = found_operating_points(measurement);
+    const auto found = segment_at_operating_points(measurement);
     const auto limit = thread_limit(threads);
     ModelFit result;
     {
@@ -188,7 +179,7 @@ py::dict diagnose(py::handle data, const std::string& model, const std::string& 
     // The report shows a raw log as read, with the windows found in it.
     std::optional<Measurement> raw_log;
     if (!report.is_none() && !measurement.has_segments()) raw_log = measurement;
-    const auto found = found_operating_points(measurement);
+    const auto found = segment_at_operating_points(measurement);
     const auto limit = thread_limit(threads);
     std::optional<Diagnosis> diagnosis;
     {

@@ -644,6 +644,11 @@ struct CaseSummary {
     Eigen::Vector2d median_noise_ratio = Eigen::Vector2d::Constant(std::nan(""));
 };
 
+// Whether any drive of the run was a raw log: only then do the tables carry the noise columns.
+bool holds_raw_logs(const StudyRun& run) {
+    return std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.raw(); });
+}
+
 // Within 20 % on both axes: what issue 21 asks of a noise estimate.
 bool noise_within_a_fifth(const StudyRecord& r) {
     return ((r.noise_from_differences.array() / r.noise_simulated.array() - 1.0).abs() <= 0.2).all();
@@ -791,7 +796,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                           "most common wrong answer"});
     if (flux) per_case_columns.insert(per_case_columns.end() - 1, Column("median flux error against the plant's", "%"));
     // Only a study of raw logs measures its noise against the simulated.
-    const bool raw = std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.raw(); });
+    const bool raw = holds_raw_logs(run);
     if (raw) {
         per_case_columns.insert(per_case_columns.end() - 1, Column("noise from differences / simulated, median u_d, u_q"));
         per_case_columns.insert(per_case_columns.end() - 1, Column("noise within 20 % on both axes"));
@@ -867,7 +872,7 @@ std::string study_csv(const StudyRun& run) {
     if (designs) columns.insert(columns.begin(), Column("design"));
     // Always there (empty where the plant's flux is linear), so that a subset of a study has the columns of the whole.
     columns.insert(columns.end() - 1, Column("median_flux_error"));
-    const bool raw = std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.raw(); });
+    const bool raw = holds_raw_logs(run);
     if (raw)
         for (const char* name : {"median_noise_ratio_u_d", "median_noise_ratio_u_q", "noise_within_20_percent"}) columns.insert(columns.end() - 1, Column(name));
     Table table("detection per case", std::move(columns));
