@@ -289,7 +289,7 @@ TEST_CASE("a drive whose simulation fails stops the study with its case and seed
 TEST_CASE("a study of raw logs finds each drive's operating points and sets the noise it measures beside the simulated", "[pmsm][study]") {
     // The averaged servo logged as a bench logs it, every settling and no segment column: the
     // diagnosis finds the windows itself, one per operating point of the profile, and measures the
-    // noise from differences; the study's truth is the same drive simulated without noise.
+    // noise from the data; the study's truth is the same drive simulated without noise.
     testing::TemporaryDirectory dir;
     const std::string raw = "[[design]]\nname = \"raw\"\nsettings = { logging.transients = true, logging.segment = false }\n";
     const auto spec = read_study(dir.write("s.toml", study_text(profile_path(), raw, "[1, 2]")));
@@ -303,7 +303,7 @@ TEST_CASE("a study of raw logs finds each drive's operating points and sets the 
         for (int a = 0; a < 2; ++a) {
             INFO("seed " << r.seed << ", axis " << a);
             CHECK(r.noise_simulated[a] > 0.0);
-            CHECK(r.noise_from_differences[a] == Approx(r.noise_simulated[a]).epsilon(0.2));
+            CHECK(r.noise_from_data[a] == Approx(r.noise_simulated[a]).epsilon(0.2));
         }
         const auto json = study_record_json(run, r);
         CHECK(json.at("steady_windows_found") == segments);

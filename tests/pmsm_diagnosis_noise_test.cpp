@@ -77,11 +77,105 @@ TEST_CASE("the noise is measured on the best-fitting model, with the overdispers
     for (Eigen::Index k = 0; k < n; ++k) offset[k] += 0.005 * (data.segment[k] % 2 == 0 ? 1.0 : -1.0);
     ModelFit worse = fit_with_residual(data, offset), better = fit_with_residual(data, clean);
     worse.spec = parse_model_spec("base+deadtime");
-    const NoiseEstimate on_clean = noise_of_best(data, {&worse, &better});
+    const NoiseEstimate on_clean = noise_of_best(data, {&worse, &better}, window_noise(data, better));
     CHECK(on_clean.model == "base");
     CHECK(on_clean.dispersion < 2.0);  // chi^2 / dof of pure noise: 1 give or take sqrt(2 / 24)
     // Alone, the fit that leaves offsets between segments: 400 rows x (5 mV)^2 / (10 mV)^2 = 100 per mean.
-    const NoiseEstimate on_offsets = noise_of_best(data, {&worse});
+    const NoiseEstimate on_offsets = noise_of_best(data, {&worse}, window_noise(data, worse));
     CHECK(on_offsets.model == "base+deadtime");
     CHECK(on_offsets.dispersion > 20.0);
+}
+
+namespace {
+
+// A ripple locked to the electrical angle: a 6th harmonic five times the noise (the current ripple
+// of the steady model's missing L di/dt) and dead time's steps at each sixth of a turn, as large as
+// the noise.
+double ripple(double angle, double noise) {
+    return noise * (5.0 * std::sin(6.0 * angle + 0.4) + (std::sin(3.0 * angle) >= 0.0 ? 1.0 : -1.0));
+}
+
+}  // namespace
+
+TEST_CASE("the data's noise is found under each segment's offset, trend and ripple locked to the angle", "[pmsm][diagnosis][noise]") {
+    std::mt19937_64 random(17);
+    const Eigen::Index rows = 3000;
+    const auto data = segmented_rows(10, rows, 25.37);  // 118 rows a turn, the angles drifting from turn to turn
+    const Eigen::Index n = data.size();
+    Eigen::VectorXd residual = white_residual(n, 0.01, 0.03, random);
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double x = static_cast<double>(k % rows) / static_cast<double>(rows);
+        residual[k] += 0.5 * data.segment[k] + 0.2 * x * x + ripple((*data.theta_e)[k], 0.01);
+        residual[n + k] += -0.3 * data.segment[k] - 0.1 * x + ripple((*data.theta_e)[k] + 1.0, 0.03);
+    }
+    const WindowNoise noise = window_noise(data, fit_with_residual(data, residual));
+    CHECK(noise.angle == "the logged theta_e");
+    // What the bins leave: a step of h = 2 sigma keeps h^2 / 6 in the 6 of 256 bins it straddles
+    // (1.6 % of the noise's variance), the sine its slope across a bin, (5 sigma 6 2 pi / 256)^2 / 12
+    // (4.5 %): about 3 % of the standard deviation.
+    CHECK(noise.sigma[0] == Approx(0.01).epsilon(0.04));
+    CHECK(noise.sigma[1] == Approx(0.03).epsilon(0.04));
+    CHECK(noise.correlation[0] < 0.05);
+    CHECK(noise.dof == Approx(static_cast<double>(n - 10 * (256 + 3))));
+    // The residual's own standard deviation within segments holds the ripple: five times the noise.
+    CHECK(estimate_noise(data, fit_with_residual(data, residual)).sigma[0] > 3.0 * 0.01);
+}
+
+TEST_CASE("without theta_e the angle is omega_e integrated over t, and without t either the trend alone is removed", "[pmsm][diagnosis][noise]") {
+    std::mt19937_64 random(19);
+    const Eigen::Index rows = 2000;
+    auto data = segmented_rows(6, rows);
+    const Eigen::Index n = data.size();
+    data.t = Eigen::VectorXd(n);
+    Eigen::VectorXd residual = white_residual(n, 0.02, 0.02, random);
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double t = 1e-4 * static_cast<double>(k), omega = 400.0 + 50.0 * data.segment[k];
+        (*data.t)[k] = t;
+        data.omega_e[k] = omega;
+        residual[k] += ripple(omega * t, 0.02);
+    }
+    const WindowNoise integrated = window_noise(data, fit_with_residual(data, residual));
+    CHECK(integrated.angle == "omega_e integrated over t");
+    CHECK(integrated.sigma[0] == Approx(0.02).epsilon(0.04));
+    data.t.reset();
+    const WindowNoise trend_only = window_noise(data, fit_with_residual(data, residual));
+    CHECK(trend_only.angle.empty());
+    CHECK(trend_only.sigma[0] > 2.5 * 0.02);  // the ripple stays: nothing tells it from noise
+    CHECK(trend_only.sigma[1] == Approx(0.02).epsilon(0.04));
+}
+
+TEST_CASE("on AR(1) noise the data's noise is its marginal standard deviation and phi its lag-one correlation", "[pmsm][diagnosis][noise]") {
+    std::mt19937_64 random(23);
+    const double phi = 0.6, innovation = 0.02;
+    const auto data = segmented_rows(8, 5000, 12.3);
+    const Eigen::Index n = data.size();
+    Eigen::VectorXd residual(2 * n);
+    residual.head(n) = ar1(n, phi, innovation, random);
+    residual.tail(n) = ar1(n, phi, innovation, random);
+    const WindowNoise noise = window_noise(data, fit_with_residual(data, residual));
+    for (int a = 0; a < 2; ++a) {
+        // A bin's rows lie a turn (406 rows) apart, so its mean spends the share of the variance
+        // that the degrees of freedom count, correlated noise or not.
+        CHECK(noise.sigma[a] == Approx(innovation / std::sqrt(1.0 - phi * phi)).epsilon(0.03));
+        CHECK(noise.correlation[a] == Approx(phi).margin(0.05));
+    }
+}
+
+TEST_CASE("a short segment whose ripple the bins cannot resolve does not move the data's noise", "[pmsm][diagnosis][noise]") {
+    // Nine long segments, then one of 120 rows at speed, turning 30 times: 15 bins, four rows a turn.
+    std::mt19937_64 random(29);
+    const Eigen::Index rows = 2400, n = 9 * rows + 120;
+    Measurement data = segmented_rows(1, n, 0.0);
+    data.theta_e = Eigen::VectorXd(n);
+    data.segment_labels = {"s0"};
+    for (Eigen::Index k = 0; k < n; ++k) {
+        data.segment[k] = k < 9 * rows ? static_cast<int>(k / rows) : 9;
+        const double turns = k < 9 * rows ? 20.3 * static_cast<double>(k % rows) / rows : 30.0 * static_cast<double>(k - 9 * rows) / 120.0;
+        (*data.theta_e)[k] = wrap_angle(2.0 * std::numbers::pi * turns);
+    }
+    for (int s = 1; s < 10; ++s) data.segment_labels.push_back("s" + std::to_string(s));
+    Eigen::VectorXd residual = white_residual(n, 0.01, 0.01, random);
+    for (Eigen::Index k = 9 * rows; k < n; ++k) residual[k] += ripple(7.0 * (*data.theta_e)[k], 0.2);
+    const WindowNoise noise = window_noise(data, fit_with_residual(data, residual));
+    CHECK(noise.sigma[0] == Approx(0.01).epsilon(0.03));
 }

@@ -180,25 +180,29 @@ TEST_CASE("an effect turned down for its held-out prediction is named with what 
 }
 
 TEST_CASE("an implausible addition after a complete plausible set does not undo it (an example: one drive)", "[pmsm][diagnosis][search]") {
-    // Seed 4 of the 5 kW raw-log study's flux harmonics: base+flux_harmonic reaches the noise floor
-    // with plausible values, then the search adds saturation at the floor with an incremental
-    // inductance no machine has. The recommendation is the plausible set, and the finding says why
-    // the addition is left out; before, the whole answer was "base, not in the library".
-    auto drive = read_simulation_profile(std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_5kw_profile.toml");
-    drive.seed = 4;
-    drive.logging.transients = true;
-    drive.logging.segment = false;
-    drive.device->rotor_flux.harmonics = {{5, 0.01, 0.5}, {7, 0.005, -1.0}};
-    Measurement data = simulate(drive).data;
-    data = select_operating_points(std::move(data), find_operating_points(data));
+    // Seed 1 of the 100 kW study's deadtime+rs_thermal: base+deadtime reaches the noise floor with
+    // plausible values, then the search adds winding heating with its coefficient at the end of its
+    // plausible range. The recommendation is the plausible set, and the finding says why the
+    // addition is left out; before, the whole answer was "base, not in the library". (The first
+    // example, seed 4 of the 5 kW raw-log flux harmonics, no longer adds saturation since the noise
+    // is measured within the windows: base+flux_harmonic there is the whole path.)
+    auto drive = read_simulation_profile(std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_100kw_profile.toml");
+    drive.seed = 1;
+    drive.device->inverter.dead_time = 1.0e-6;
+    auto& thermal = drive.device->thermal;
+    thermal.enabled = true;
+    thermal.winding_capacity = 4.0;
+    thermal.winding_to_ambient = 0.03;
+    thermal.winding_to_magnet = 1.0e6;
+    const Measurement data = simulate(drive).data;
     DiagnosisOptions options;
     options.pole_pairs = drive.motor.pole_pairs;
     const Diagnosis d = diagnose(data, parse_model_spec("base"), options);
     REQUIRE(d.path.size() == 3);
     REQUIRE_FALSE(d.path.back().plausible);
     CHECK(d.recommended_step == 1);
-    CHECK(d.recommended.text() == "base+flux_harmonic");
+    CHECK(d.recommended.text() == "base+deadtime");
     CHECK_FALSE(d.not_in_library);
     CHECK(std::any_of(d.findings.begin(), d.findings.end(),
-                      [](const std::string& f) { return f.rfind("The search then added saturation", 0) == 0; }));
+                      [](const std::string& f) { return f.rfind("The search then added rs_thermal", 0) == 0; }));
 }

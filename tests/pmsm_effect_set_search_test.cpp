@@ -5,6 +5,7 @@
 
 #include "problems/pmsm/diagnosis/design.hpp"
 #include "problems/pmsm/diagnosis/effect_set_search.hpp"
+#include "problems/pmsm/diagnosis/noise.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 
 using namespace mhb::pmsm;
@@ -26,7 +27,7 @@ TEST_CASE("a round of forward selection picks the hidden effect, alone", "[pmsm]
     CHECK(round[1].effect == "encoder_offset");
     CHECK(round[1].added_parameters == 1);
     CHECK(round[1].fit.spec.text() == "base+encoder_offset");
-    const RoundChoice choice = choose_addition(data, design_of(data), model, round, options);
+    const RoundChoice choice = choose_addition(data, design_of(data), model, round, window_noise(data, model), options);
     REQUIRE(choice.best);
     CHECK(choice.best->effect == "encoder_offset");
     CHECK(choice.tie == std::vector<std::string>{"encoder_offset"});
@@ -54,7 +55,7 @@ TEST_CASE("pruning removes the effect the others make unnecessary, and never one
     const auto& data = encoder_offset_data();
     const DiagnosisOptions options;
     const ModelFit both = fit_model(data, parse_model_spec("base+encoder_offset+voltage_offset"), options.fit);
-    const auto weakest = weakest_effect(data, parse_model_spec("base"), both, options.fit);
+    const auto weakest = weakest_effect(data, parse_model_spec("base"), both, window_noise(data, both), options.fit);
     REQUIRE(weakest);
     CHECK(weakest->kind == StepKind::Pruned);
     CHECK(weakest->effect == "voltage_offset");
@@ -62,7 +63,7 @@ TEST_CASE("pruning removes the effect the others make unnecessary, and never one
     CHECK(weakest->added_parameters == -static_cast<int>(both.free_count() - weakest->fit.free_count()));
     CHECK(weakest->added_parameters < 0);
     // With voltage_offset in the model diagnosed, only what the search added may go: the hidden effect stays.
-    CHECK_FALSE(weakest_effect(data, parse_model_spec("base+voltage_offset"), both, options.fit));
+    CHECK_FALSE(weakest_effect(data, parse_model_spec("base+voltage_offset"), both, window_noise(data, both), options.fit));
 }
 
 TEST_CASE("a path step writes its change as the JSON and the text do", "[pmsm][diagnosis][search]") {

@@ -77,7 +77,7 @@ Rates raw_log_rates(const std::string& profile, int first_seed, int seeds, bool 
         rates.verdict_match += same ? 1 : 0;
 
         const Eigen::Vector2d truth = sensor_noise_in_residual(steady_spec.motor, steady.data, clean.data);
-        const Eigen::Vector2d measured = on_raw.noise.difference_sigma;
+        const Eigen::Vector2d measured = on_raw.noise.window.sigma;
         const bool within = (measured.array() / truth.array() - 1.0).abs().maxCoeff() <= 0.2;
         rates.noise_within += within ? 1 : 0;
         if (print)

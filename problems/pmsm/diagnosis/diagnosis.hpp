@@ -35,21 +35,28 @@ struct DiagnosisOptions {
     int pole_pairs = 0;
 };
 
+// The noise of the data (noise.hpp, window_noise): per axis the standard deviation of the diagnosed
+// model's residual within segments less each segment's trend and what is locked to the angle, the
+// lag-one correlation of what is left, the degrees of freedom, and the angle the bins were had
+// from (empty: no angle, the trend alone).
+struct WindowNoise {
+    Eigen::Vector2d sigma{0.0, 0.0};
+    Eigen::Vector2d correlation{0.0, 0.0};
+    double dof = 0.0;
+    std::string angle;
+};
+
 struct NoiseEstimate {
     std::string model;                  // the fit it was measured on
     Eigen::Vector2d sigma{0.0, 0.0};    // within-segment residual standard deviation per axis (V)
     Eigen::Vector2d long_run{0.0, 0.0}; // long-run standard deviation per axis (V): sigma of a mean times sqrt(n)
     double effective_samples = 0.0;     // both axes: sum of n sigma^2 / long_run^2
     double dispersion = 1.0;            // lack of fit of that model's segment means per degree of freedom, at least 1
-    // Measured from the data, not from a model (noise.hpp, difference_noise): per axis the standard
-    // deviation of the logged voltage's noise from its sample-to-sample differences within segments,
-    // the lag-one correlation that corrects it, and the pairs of consecutive rows used.
-    Eigen::Vector2d difference_sigma{0.0, 0.0};
-    Eigen::Vector2d difference_correlation{0.0, 0.0};
-    double difference_pairs = 0.0;
-    // Per axis: the evidence is measured in the difference-based noise instead of the residual's,
-    // because the residual holds structure within segments (noise.hpp, noise_of_best).
-    std::array<bool, 2> from_differences{false, false};
+    // Measured from the data, not from the residual's level (noise.hpp, window_noise).
+    WindowNoise window;
+    // Per axis: the evidence is measured in the window noise instead of the residual's, because the
+    // residual holds structure within segments (noise.hpp, noise_of_best).
+    std::array<bool, 2> from_windows{false, false};
 };
 
 // A hypothetical operating point added to the design, and what it would do for an effect.

@@ -61,7 +61,7 @@ Measurement search_design(const Measurement& data, const FitOptions& options) {
 NoiseEstimate measure_noise(const Measurement& data, const SetSearch& search, const std::vector<Candidate>& candidates) {
     std::vector<const ModelFit*> fits{&search.steps.back().fit};
     for (const auto& c : candidates) fits.push_back(&c.fit);
-    return noise_of_best(data, fits);
+    return noise_of_best(data, fits, search.data_noise);
 }
 
 ModelCheck check_model(const Measurement& data, const ModelSpec& spec, const Baseline& baseline, const NoiseEstimate& noise,

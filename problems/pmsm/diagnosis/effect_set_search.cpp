@@ -36,13 +36,13 @@ std::vector<Addition> fit_additions(const Measurement& data, const ModelSpec& sp
 }
 
 RoundChoice choose_addition(const Measurement& data, const Measurement& design, const ModelFit& current, const std::vector<Addition>& round,
-                            const DiagnosisOptions& options) {
+                            const WindowNoise& data_noise, const DiagnosisOptions& options) {
     std::vector<const ModelFit*> fits{&current};
     for (const auto& a : round) fits.push_back(&a.fit);
     // No overdispersion here: while two effects are missing, no single addition removes the
     // structure of the other, and dividing by it would hide both. Structure that no library set
     // explains is caught at the end, where the set must reach the noise floor.
-    NoiseEstimate noise = noise_of_best(data, fits);
+    NoiseEstimate noise = noise_of_best(data, fits, data_noise);
     noise.dispersion = 1.0;
     const double log_n = std::log(std::max(noise.effective_samples, 2.0));
     const double rows = static_cast<double>(data.size());
@@ -108,9 +108,10 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     return choice;
 }
 
-std::optional<SearchStep> weakest_effect(const Measurement& data, const ModelSpec& spec, const ModelFit& current, const FitOptions& compared) {
+std::optional<SearchStep> weakest_effect(const Measurement& data, const ModelSpec& spec, const ModelFit& current, const WindowNoise& data_noise,
+                                         const FitOptions& compared) {
     // The criterion that added the effects, no overdispersion: the same evidence decides both ways.
-    NoiseEstimate noise = noise_of_best(data, {&current});
+    NoiseEstimate noise = noise_of_best(data, {&current}, data_noise);
     noise.dispersion = 1.0;
     const double log_n = std::log(std::max(noise.effective_samples, 2.0));
     std::optional<SearchStep> weakest;
@@ -145,6 +146,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
                              const DiagnosisOptions& options) {
     SetSearch s;
     s.steps.push_back({model, StepKind::Start, "", 0});
+    s.data_noise = window_noise(data, model);
     // Fits after the first round are compared by their residuals and shown on the path without
     // intervals, so they are made without them. Each addition is polished jointly with the effects
     // already there: screening it with their values held (tried in 2026-11) lost the second effect of
@@ -156,7 +158,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
     for (const auto& c : first_round) round.push_back({c.effect, c.fit, c.added_parameters});
     while (!round.empty() && static_cast<int>(s.steps.size()) - 1 < options.max_effects) {
         const ModelFit current = s.steps.back().fit;
-        const RoundChoice choice = choose_addition(data, design, current, round, options);
+        const RoundChoice choice = choose_addition(data, design, current, round, s.data_noise, options);
         if (!choice.best) {
             s.unpredictive = choice.unpredictive;
             break;
@@ -176,7 +178,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
     }
     // Backward pruning, only of what the search added and only once two effects are there.
     while (s.steps.back().fit.spec.effects.size() >= spec.effects.size() + 2) {
-        auto weakest = weakest_effect(data, spec, s.steps.back().fit, compared);
+        auto weakest = weakest_effect(data, spec, s.steps.back().fit, s.data_noise, compared);
         if (!weakest) break;
         s.pruned.push_back(weakest->effect);
         s.steps.push_back(std::move(*weakest));

@@ -35,6 +35,7 @@ struct SetSearch {
     ModelSpec tie_spec;
     Eigen::VectorXd tie_values;
     std::vector<UnpredictiveAddition> unpredictive;  // of the round that added nothing
+    WindowNoise data_noise;  // window_noise on the model diagnosed: each round's evidence floor
 };
 
 // One round of forward selection from `current`: the supported addition with the strongest evidence
@@ -46,12 +47,14 @@ struct RoundChoice {
     // predict too few held-out segments.
     std::vector<UnpredictiveAddition> unpredictive;
 };
+// `data_noise` is the data's noise (window_noise).
 RoundChoice choose_addition(const Measurement& data, const Measurement& design, const ModelFit& current, const std::vector<Addition>& round,
-                            const DiagnosisOptions& options);
+                            const WindowNoise& data_noise, const DiagnosisOptions& options);
 
 // The effect of `current` (not in `spec`) whose removal costs least, when that is less than strong
 // evidence: the model without it, polished with `compared`.
-std::optional<SearchStep> weakest_effect(const Measurement& data, const ModelSpec& spec, const ModelFit& current, const FitOptions& compared);
+std::optional<SearchStep> weakest_effect(const Measurement& data, const ModelSpec& spec, const ModelFit& current, const WindowNoise& data_noise,
+                                         const FitOptions& compared);
 
 // The search from `model` (the fit of `spec`), its first round being `first_round` (each library
 // effect added to it once). `design` is design_of the data (design.hpp).

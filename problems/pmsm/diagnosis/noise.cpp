@@ -1,10 +1,17 @@
 #include "problems/pmsm/diagnosis/noise.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <fmt/format.h>
 
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
+#include "problems/pmsm/diagnosis/shaft_angle.hpp"
 
 namespace mhb::pmsm {
 
@@ -48,31 +55,120 @@ NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
     return noise;
 }
 
-void difference_noise(const Measurement& data, const Eigen::VectorXd& residual, NoiseEstimate& noise) {
-    const Eigen::Index n = data.size();
-    const auto same_segment = [&](Eigen::Index a, Eigen::Index b) { return !data.has_segments() || data.segment[a] == data.segment[b]; };
-    for (int a = 0; a < 2; ++a) {
-        const auto u = residual.segment(a * n, n);
-        double g0 = 0.0, g1 = 0.0;
-        Eigen::Index pairs = 0, lagged = 0;
-        for (Eigen::Index k = 1; k < n; ++k) {
-            if (!same_segment(k - 1, k)) continue;
-            const double d = u[k] - u[k - 1];
-            g0 += d * d;
-            ++pairs;
-            if (k >= 2 && same_segment(k - 2, k - 1)) {
-                g1 += d * (u[k - 1] - u[k - 2]);
-                ++lagged;
-            }
-        }
-        if (pairs == 0) continue;
-        g0 /= static_cast<double>(pairs);
-        const double r = lagged > 0 && g0 > 0.0 ? g1 / static_cast<double>(lagged) / g0 : -0.5;
-        const double rho = std::clamp(1.0 + 2.0 * r, 0.0, 0.9);
-        noise.difference_sigma[a] = std::sqrt(g0 / (2.0 * (1.0 - rho)));
-        noise.difference_correlation[a] = rho;
-        noise.difference_pairs = static_cast<double>(pairs);
+namespace {
+
+// Removes from `r` (one window's residual, one axis) its least-squares quadratic in `x` (times
+// scaled to [-1, 1]) and, with `bin` given, its mean in each angle bin: alternating projections onto
+// two nearly orthogonal spaces, which converge to the projection onto their sum; four rounds leave
+// less than a percent of what they share. Returns the parameters spent (3 and the bins used).
+int remove_trend_and_angle_bins(Eigen::Ref<Eigen::VectorXd> r, const Eigen::VectorXd& x, const std::vector<int>& bin, int bins,
+                                std::vector<double>& bin_sum, std::vector<int>& bin_rows) {
+    const Eigen::Index n = r.size();
+    Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const Eigen::Vector3d p(1.0, x[k], x[k] * x[k]);
+        gram += p * p.transpose();
     }
+    const Eigen::LDLT<Eigen::Matrix3d> solve(gram);
+    int used = 0;
+    for (int round = 0; round < (bins > 0 ? 4 : 1); ++round) {
+        Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+        for (Eigen::Index k = 0; k < n; ++k) moment += r[k] * Eigen::Vector3d(1.0, x[k], x[k] * x[k]);
+        const Eigen::Vector3d c = solve.solve(moment);
+        for (Eigen::Index k = 0; k < n; ++k) r[k] -= c[0] + x[k] * (c[1] + x[k] * c[2]);
+        if (bins == 0) continue;
+        std::fill(bin_sum.begin(), bin_sum.begin() + bins, 0.0);
+        std::fill(bin_rows.begin(), bin_rows.begin() + bins, 0);
+        for (Eigen::Index k = 0; k < n; ++k) {
+            bin_sum[static_cast<std::size_t>(bin[static_cast<std::size_t>(k)])] += r[k];
+            ++bin_rows[static_cast<std::size_t>(bin[static_cast<std::size_t>(k)])];
+        }
+        for (Eigen::Index k = 0; k < n; ++k) {
+            const auto b = static_cast<std::size_t>(bin[static_cast<std::size_t>(k)]);
+            r[k] -= bin_sum[b] / bin_rows[b];
+        }
+        used = static_cast<int>(std::count_if(bin_rows.begin(), bin_rows.begin() + bins, [](int m) { return m > 0; }));
+    }
+    return 3 + used;
+}
+
+struct WindowVariance {
+    double variance = 0.0, correlation = 0.0, dof = 0.0;
+};
+
+// The median of `field` over `windows`, each weighted by its degrees of freedom (sorts them): a
+// window whose structure the bins could not resolve (a short one at speed, a few bins across a
+// large ripple) is an outlier among windows that agree, not a share of a pooled sum.
+double weighted_median(std::vector<WindowVariance>& windows, double WindowVariance::*field) {
+    std::sort(windows.begin(), windows.end(), [&](const auto& a, const auto& b) { return a.*field < b.*field; });
+    double total = 0.0;
+    for (const auto& w : windows) total += w.dof;
+    double below = 0.0;
+    for (const auto& w : windows) {
+        below += w.dof;
+        if (below >= 0.5 * total) return w.*field;
+    }
+    return windows.back().*field;
+}
+
+}  // namespace
+
+WindowNoise window_noise(const Measurement& data, const ModelFit& fit) {
+    Eigen::VectorXd storage;
+    return window_noise(data, residual_of(data, fit, storage));
+}
+
+WindowNoise window_noise(const Measurement& data, const Eigen::VectorXd& residual) {
+    const Eigen::Index n = data.size();
+    WindowNoise noise;
+    const bool angle_logged = data.theta_e.has_value();
+    Eigen::VectorXd integrated;
+    if (!angle_logged && data.t) integrated = integrated_shaft_angle(data, 1);
+    const bool has_angle = angle_logged || integrated.size() == n;
+    std::vector<double> bin_sum(window_noise_bins);
+    std::vector<int> bin_rows(window_noise_bins);
+    std::vector<int> bin;
+    Eigen::VectorXd x, r;
+    // Per window and axis: variance, lag-one correlation, degrees of freedom.
+    std::array<std::vector<WindowVariance>, 2> windows;
+    for (const auto& range : segment_ranges(data)) {
+        const Eigen::Index m = range.rows;
+        const int bins = has_angle ? static_cast<int>(std::min<Eigen::Index>(window_noise_bins, m / window_noise_rows_per_bin)) : 0;
+        if (m - 3 - bins < m / 2 || m < 8) continue;  // too short to leave the noise most of its rows
+        x.resize(m);
+        for (Eigen::Index k = 0; k < m; ++k) x[k] = data.t ? (*data.t)[range.first + k] : static_cast<double>(k);
+        const double mid = 0.5 * (x[0] + x[m - 1]), half = 0.5 * (x[m - 1] - x[0]);
+        if (half > 0.0) x.array() = (x.array() - mid) / half;
+        else x.setZero();
+        bin.resize(static_cast<std::size_t>(m));
+        for (Eigen::Index k = 0; k < m && bins > 0; ++k) {
+            const double a = angle_logged ? (*data.theta_e)[range.first + k] : integrated[range.first + k];
+            const double turn = a / (2.0 * std::numbers::pi) - std::floor(a / (2.0 * std::numbers::pi));
+            bin[static_cast<std::size_t>(k)] = std::min(bins - 1, static_cast<int>(turn * bins));
+        }
+        for (int axis = 0; axis < 2; ++axis) {
+            r = residual.segment(axis * n + range.first, m);
+            const double dof = static_cast<double>(m - remove_trend_and_angle_bins(r, x, bin, bins, bin_sum, bin_rows));
+            const double square = r.squaredNorm();
+            windows[axis].push_back({square / dof, square > 0.0 ? r.head(m - 1).dot(r.tail(m - 1)) / square : 0.0, dof});
+        }
+    }
+    noise.angle = has_angle ? (angle_logged ? "the logged theta_e" : "omega_e integrated over t") : "";
+    if (windows[0].empty()) return noise;
+    for (int axis = 0; axis < 2; ++axis) {
+        auto& w = windows[axis];
+        noise.sigma[axis] = std::sqrt(weighted_median(w, &WindowVariance::variance));
+        noise.correlation[axis] = std::clamp(weighted_median(w, &WindowVariance::correlation), 0.0, 0.9);
+    }
+    for (const auto& w : windows[0]) noise.dof += w.dof;
+    return noise;
+}
+
+std::string window_noise_method(const WindowNoise& noise) {
+    return "the residual of the model diagnosed or of the best fit, the lower, within segments less each segment's quadratic trend in time" +
+           (noise.angle.empty() ? std::string(", no angle (neither theta_e nor t is logged); the median over segments")
+                                : fmt::format(" and its means in up to {} bins of the electrical angle, from {}; the median over segments",
+                                              window_noise_bins, noise.angle));
 }
 
 double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const NoiseEstimate& noise) {
@@ -81,7 +177,7 @@ double likelihood_ratio(const ModelFit& model, const ModelFit& candidate, const 
     return lr / noise.dispersion;
 }
 
-NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const ModelFit*>& fits) {
+NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const ModelFit*>& fits, const WindowNoise& window) {
     // Only a physically possible machine measures the noise: a flexible effect that buys a lower
     // residual with a negative inductance has fitted the noise itself (on two operating points the
     // saturation law's incremental inductances follow the controller's correlation of current and
@@ -93,15 +189,23 @@ NoiseEstimate noise_of_best(const Measurement& data, const std::vector<const Mod
     NoiseEstimate noise = estimate_noise(data, *best);
     Eigen::VectorXd storage;
     const Eigen::VectorXd& residual = residual_of(data, *best, storage);
-    difference_noise(data, residual, noise);
+    // The lower of the two on each axis: what a model leaves that is neither slow nor locked to the
+    // angle can only add to the noise.
+    noise.window = window;
+    const WindowNoise on_best = window_noise(data, residual);
+    for (int a = 0; a < 2; ++a)
+        if (on_best.dof > 0.0 && (!(window.dof > 0.0) || on_best.sigma[a] < window.sigma[a])) {
+            noise.window.sigma[a] = on_best.sigma[a];
+            noise.window.correlation[a] = on_best.correlation[a];
+        }
     // A residual well above the data's own noise holds structure (transients, a misfit within
     // segments) that would set the floor too high and hide effects: the evidence is then measured
     // in the noise of the data, first-order correlated as measured.
     noise.effective_samples = 0.0;
     for (int a = 0; a < 2; ++a) {
-        const double s = noise.difference_sigma[a], rho = noise.difference_correlation[a];
+        const double s = noise.window.sigma[a], rho = noise.window.correlation[a];
         if (s > 0.0 && noise.sigma[a] > residual_structure_ratio * s) {
-            noise.from_differences[a] = true;
+            noise.from_windows[a] = true;
             noise.sigma[a] = s;
             noise.long_run[a] = s * std::sqrt((1.0 + rho) / (1.0 - rho));
         }

@@ -128,11 +128,11 @@ json diagnosis_json(const Diagnosis& d) {
                     {"long_run_sigma", {{"u_d", d.noise.long_run[0]}, {"u_q", d.noise.long_run[1]}}},
                     {"effective_samples", d.noise.effective_samples},
                     {"dispersion", d.noise.dispersion},
-                    {"from_differences", {{"method", "first differences of the residual within segments, corrected for their lag-one correlation"},
-                                   {"sigma", {{"u_d", d.noise.difference_sigma[0]}, {"u_q", d.noise.difference_sigma[1]}}},
-                                   {"correlation", {{"u_d", d.noise.difference_correlation[0]}, {"u_q", d.noise.difference_correlation[1]}}},
-                                   {"pairs", d.noise.difference_pairs},
-                                   {"used_for_evidence", {{"u_d", d.noise.from_differences[0]}, {"u_q", d.noise.from_differences[1]}}}}}};
+                    {"from_data", {{"method", window_noise_method(d.noise.window)},
+                                   {"sigma", {{"u_d", d.noise.window.sigma[0]}, {"u_q", d.noise.window.sigma[1]}}},
+                                   {"correlation", {{"u_d", d.noise.window.correlation[0]}, {"u_q", d.noise.window.correlation[1]}}},
+                                   {"degrees_of_freedom", d.noise.window.dof},
+                                   {"used_for_evidence", {{"u_d", d.noise.from_windows[0]}, {"u_q", d.noise.from_windows[1]}}}}}};
     out["lack_of_fit"] = lack_of_fit_json(d.lack_of_fit);
     if (d.after_winner) out["lack_of_fit_after_winner"] = lack_of_fit_json(*d.after_winner);
     out["loso_rms"] = d.model_loso_rms ? json(*d.model_loso_rms) : json(nullptr);

@@ -22,10 +22,9 @@ std::string path_text(const Diagnosis& d) {
 }  // namespace
 
 std::string noise_from_data_text(const NoiseEstimate& n) {
-    std::string t = fmt::format("noise from sample-to-sample differences (first differences of the residual within segments, corrected for "
-                                "their lag-one correlation): u_d {:.3g} V (correlation {:.2f}), u_q {:.3g} V (correlation {:.2f})",
-                                n.difference_sigma[0], n.difference_correlation[0], n.difference_sigma[1], n.difference_correlation[1]);
-    const bool d = n.from_differences[0], q = n.from_differences[1];
+    std::string t = fmt::format("noise measured from the data: u_d {:.3g} V (lag-one correlation {:.2f}), u_q {:.3g} V ({:.2f}); from {}",
+                                n.window.sigma[0], n.window.correlation[0], n.window.sigma[1], n.window.correlation[1], window_noise_method(n.window));
+    const bool d = n.from_windows[0], q = n.from_windows[1];
     if (d || q)
         t += fmt::format("; the evidence is measured in it on {}: the residual's noise exceeds it more than {}-fold, so it holds structure",
                          d && q ? "both axes" : d ? "u_d" : "u_q", residual_structure_ratio);

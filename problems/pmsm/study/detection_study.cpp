@@ -590,7 +590,7 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         r.rms = d.model.rms.total;
         r.rms_recommended = fit->rms.total;
         r.noise = std::sqrt(d.noise.sigma.squaredNorm() / 2.0);
-        if (r.raw()) r.noise_from_differences = d.noise.difference_sigma;
+        if (r.raw()) r.noise_from_data = d.noise.window.sigma;
         r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         run.records[job] = std::move(r);
         const std::size_t finished = ++done;
@@ -638,7 +638,7 @@ struct CaseSummary {
     std::array<std::size_t, 4> covered{}, intervals{};
     // The same over those of them whose recommended model leaves no significant structure.
     std::array<std::size_t, 4> covered_without_structure{}, intervals_without_structure{};
-    // Raw logs: the noise measured from differences over the simulated, median ratio per axis, and
+    // Raw logs: the noise measured from the data over the simulated, median ratio per axis, and
     // the drives in which both axes are within 20 % of it.
     std::size_t raw = 0, noise_within = 0;
     Eigen::Vector2d median_noise_ratio = Eigen::Vector2d::Constant(std::nan(""));
@@ -651,7 +651,7 @@ bool holds_raw_logs(const StudyRun& run) {
 
 // Within 20 % on both axes: what issue 21 asks of a noise estimate.
 bool noise_within_a_fifth(const StudyRecord& r) {
-    return ((r.noise_from_differences.array() / r.noise_simulated.array() - 1.0).abs() <= 0.2).all();
+    return ((r.noise_from_data.array() / r.noise_simulated.array() - 1.0).abs() <= 0.2).all();
 }
 
 // "95, 100, 90, 100 % of 20": the share of intervals that hold the truth, parameter by parameter.
@@ -682,7 +682,7 @@ std::vector<CaseSummary> summaries(const StudyRun& run) {
         if (r.raw()) {
             ++s.raw;
             s.noise_within += noise_within_a_fifth(r) ? 1 : 0;
-            for (int a = 0; a < 2; ++a) noise_ratios[r.case_index][static_cast<std::size_t>(a)].push_back(r.noise_from_differences[a] / r.noise_simulated[a]);
+            for (int a = 0; a < 2; ++a) noise_ratios[r.case_index][static_cast<std::size_t>(a)].push_back(r.noise_from_data[a] / r.noise_simulated[a]);
         }
         ++s.runs;
         s.correct += r.correct ? 1 : 0;
@@ -798,7 +798,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     // Only a study of raw logs measures its noise against the simulated.
     const bool raw = holds_raw_logs(run);
     if (raw) {
-        per_case_columns.insert(per_case_columns.end() - 1, Column("noise from differences / simulated, median u_d, u_q"));
+        per_case_columns.insert(per_case_columns.end() - 1, Column("noise from the data / simulated, median u_d, u_q"));
         per_case_columns.insert(per_case_columns.end() - 1, Column("noise within 20 % on both axes"));
     }
     Table per_case("detection per case", std::move(per_case_columns));
@@ -940,7 +940,7 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
     // Only for a raw log (StudyRecord::windows).
     if (r.raw()) {
         out["steady_windows_found"] = r.windows;
-        out["noise_from_differences"] = {{"u_d", r.noise_from_differences[0]}, {"u_q", r.noise_from_differences[1]}};
+        out["noise_from_data"] = {{"u_d", r.noise_from_data[0]}, {"u_q", r.noise_from_data[1]}};
         out["noise_simulated"] = {{"u_d", r.noise_simulated[0]}, {"u_q", r.noise_simulated[1]}};
     }
     out["seconds"] = r.seconds;

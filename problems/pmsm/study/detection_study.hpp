@@ -151,10 +151,10 @@ struct StudyRecord {
     double rms = 0.0, rms_recommended = 0.0, noise = 0.0;  // V
     // A raw log (the profile logs transients without a segment column): the steady windows found in
     // it (0: the log had its segments), and per axis (u_d, u_q, V) the noise the diagnosis measured
-    // from sample-to-sample differences against the simulated sensors' noise as the true model's
+    // from the data (window_noise) against the simulated sensors' noise as the true model's
     // residual sees it (the same drive simulated without noise, over the found windows).
     std::size_t windows = 0;
-    Eigen::Vector2d noise_from_differences = Eigen::Vector2d::Constant(std::nan(""));
+    Eigen::Vector2d noise_from_data = Eigen::Vector2d::Constant(std::nan(""));
     Eigen::Vector2d noise_simulated = Eigen::Vector2d::Constant(std::nan(""));
     bool raw() const { return windows > 0; }
     double seconds = 0.0;               // simulate + diagnose, wall
