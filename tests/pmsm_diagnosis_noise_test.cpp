@@ -179,3 +179,15 @@ TEST_CASE("a short segment whose ripple the bins cannot resolve does not move th
     const WindowNoise noise = window_noise(data, fit_with_residual(data, residual));
     CHECK(noise.sigma[0] == Approx(0.01).epsilon(0.03));
 }
+
+TEST_CASE("a segment longer than window_noise_max_rows is measured on its middle rows", "[pmsm][diagnosis][noise]") {
+    std::mt19937_64 random(31);
+    const Eigen::Index rows = 100000, middle = window_noise_max_rows, first = (rows - middle) / 2;
+    const auto data = segmented_rows(1, rows, 300.7);
+    Eigen::VectorXd residual = white_residual(rows, 0.05, 0.05, random);
+    residual.segment(first, middle) *= 0.2;  // 0.01 in the middle rows only
+    const WindowNoise noise = window_noise(data, fit_with_residual(data, residual));
+    CHECK(noise.sigma[0] == Approx(0.01).epsilon(0.03));
+    CHECK(noise.sigma[1] == Approx(0.05).epsilon(0.03));
+    CHECK(noise.dof == Approx(static_cast<double>(middle - window_noise_bins - 3)));
+}

@@ -131,23 +131,25 @@ WindowNoise window_noise(const Measurement& data, const Eigen::VectorXd& residua
     Eigen::VectorXd x, r;
     // Per window and axis: variance, lag-one correlation, degrees of freedom.
     std::array<std::vector<WindowVariance>, 2> windows;
-    for (const auto& range : segment_ranges(data)) {
-        const Eigen::Index m = range.rows;
+    for (const auto& segment : segment_ranges(data)) {
+        // A longer segment is measured on its middle rows only (noise.hpp): a fixed cost a segment.
+        const Eigen::Index m = std::min(segment.rows, window_noise_max_rows);
+        const Eigen::Index first = segment.first + (segment.rows - m) / 2;
         const int bins = has_angle ? static_cast<int>(std::min<Eigen::Index>(window_noise_bins, m / window_noise_rows_per_bin)) : 0;
         if (m - 3 - bins < m / 2 || m < 8) continue;  // too short to leave the noise most of its rows
         x.resize(m);
-        for (Eigen::Index k = 0; k < m; ++k) x[k] = data.t ? (*data.t)[range.first + k] : static_cast<double>(k);
+        for (Eigen::Index k = 0; k < m; ++k) x[k] = data.t ? (*data.t)[first + k] : static_cast<double>(k);
         const double mid = 0.5 * (x[0] + x[m - 1]), half = 0.5 * (x[m - 1] - x[0]);
         if (half > 0.0) x.array() = (x.array() - mid) / half;
         else x.setZero();
         bin.resize(static_cast<std::size_t>(m));
         for (Eigen::Index k = 0; k < m && bins > 0; ++k) {
-            const double a = angle_logged ? (*data.theta_e)[range.first + k] : integrated[range.first + k];
+            const double a = angle_logged ? (*data.theta_e)[first + k] : integrated[first + k];
             const double turn = a / (2.0 * std::numbers::pi) - std::floor(a / (2.0 * std::numbers::pi));
             bin[static_cast<std::size_t>(k)] = std::min(bins - 1, static_cast<int>(turn * bins));
         }
         for (int axis = 0; axis < 2; ++axis) {
-            r = residual.segment(axis * n + range.first, m);
+            r = residual.segment(axis * n + first, m);
             const double dof = static_cast<double>(m - remove_trend_and_angle_bins(r, x, bin, bins, bin_sum, bin_rows));
             const double square = r.squaredNorm();
             windows[axis].push_back({square / dof, square > 0.0 ? r.head(m - 1).dot(r.tail(m - 1)) / square : 0.0, dof});
