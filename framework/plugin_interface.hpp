@@ -16,7 +16,7 @@
 // 8: Effect gained unseen_bias (a virtual: what it does to the base parameters that no log shows).
 // 9: ModelState gained ld and lq (the inductances of the present run, for terms proportional to them).
 // 10: Effect's narrow_range became plausible_range, which may reach beyond the declared range.
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 10
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 11
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

@@ -134,6 +134,10 @@ struct PathStep {
     double structure = 0.0;               // power of the significant structure left, relative to the noise's
     LawAllowance allowance;               // the structure the set's laws may leave by their stated accuracy
     std::string signature;                // of that structure, in words (empty when none is significant)
+    // When the set's free fit left parameters at an end of their range and the fit with them held
+    // at their material values (Effect::material_value) is as good as far as the data can tell: what
+    // was held, in words; the step's fit is then the held one.
+    std::string held_at_material;
 
     // The change as the JSON and the text write it: "+effect", "-effect", empty for the start.
     std::string change() const {

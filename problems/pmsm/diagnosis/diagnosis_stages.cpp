@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <boost/math/distributions/chi_squared.hpp>
+#include <fmt/format.h>
+
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
@@ -133,6 +136,62 @@ void score_candidates(std::vector<Candidate>& candidates, const Measurement& dat
     std::stable_sort(candidates.begin(), candidates.end(), ranks_before);
 }
 
+namespace {
+
+// A set implausible only for parameters left at an end of their range that have a material value
+// (winding heating's coefficient at the end of copper's spread, traded against a dead-time band): it
+// is refitted with them held there, and the held fit becomes the step's when the data cannot tell
+// it from the free one (its loss in noise units within the chi-squared 95 % point of as many
+// degrees of freedom) and nothing else is implausible. A range end says the data pull beyond the
+// material; an interval that holds the material's value says they do not pull hard.
+void hold_at_material_values(const Measurement& data, PathStep& step, const NoiseEstimate& noise, int& added_parameters) {
+    std::vector<std::string> problems;
+    check_base(step.fit, problems);
+    if (!problems.empty()) return;
+    const auto held = material_values_at_range_ends(step.fit, data);
+    if (held.empty()) return;
+    ModelSpec spec = step.fit.spec;
+    int count = 0;
+    std::string what;
+    for (auto& term : spec.effects) {
+        const auto it = held.find(term.name);
+        if (it == held.end()) continue;
+        for (const auto& [name, value] : it->second) {
+            term.fixed[name] = value;
+            ++count;
+            const std::string full = term.name + "." + name;
+            what += fmt::format("{}{} = {:.4g} (free: {:.4g})", what.empty() ? "" : ", ", full, value, step.fit.values[step.fit.index_of(full)]);
+        }
+    }
+    const auto model = make_model(spec, data);
+    const auto& names = model->parameter_names();
+    Eigen::VectorXd start(static_cast<Eigen::Index>(names.size()));
+    for (std::size_t j = 0; j < names.size(); ++j) start[static_cast<Eigen::Index>(j)] = step.fit.values[step.fit.index_of(names[j])];
+    for (const auto& term : spec.effects)
+        for (const auto& [name, value] : term.fixed) {
+            const auto at = std::find(names.begin(), names.end(), term.name + "." + name);
+            if (at != names.end()) start[at - names.begin()] = value;
+        }
+    FitOptions options;
+    options.intervals = false;
+    options.keep_residual = false;
+    ModelFit refit = polish_model(data, spec, start, options);
+    const double loss = likelihood_ratio(refit, step.fit, noise);
+    const double limit = boost::math::quantile(boost::math::chi_squared(count), 0.95);
+    check_base(refit, problems);
+    check_effects(refit, data, problems);
+    if (!(loss <= limit) || !problems.empty()) return;
+    step.held_at_material = fmt::format("{}: the free fit left it at the end of its plausible range, and held at the material's value "
+                                        "it fits as well as far as this log can tell (loss {:.2f} against the chi-squared 95 % point {:.2f})",
+                                        what, loss, limit);
+    step.fit = std::move(refit);
+    step.implausible.clear();
+    step.plausible = true;
+    added_parameters -= count;
+}
+
+}  // namespace
+
 PathTrace trace_path(const Measurement& data, const SetSearch& search, const ModelFit& model, const LackOfFit& model_left,
                      const NoiseEstimate& noise, double floor_tolerance, const ShaftAngle& shaft) {
     PathTrace trace;
@@ -149,9 +208,11 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
         check_base(step.fit, step.implausible);
         check_effects(step.fit, data, step.implausible);
         step.plausible = step.implausible.empty();
+        int added_parameters = s.added_parameters;
+        if (!step.plausible && k > 0) hold_at_material_values(data, step, path_noise, added_parameters);
         step.kind = s.kind;
         step.effect = s.effect;
-        step.delta_bic = k == 0 ? 0.0 : -likelihood_ratio(search.steps[k - 1].fit, step.fit, path_noise) + s.added_parameters * log_n;
+        step.delta_bic = k == 0 ? 0.0 : -likelihood_ratio(search.steps[k - 1].fit, step.fit, path_noise) + added_parameters * log_n;
         step.explained = explained_fraction(model, step.fit, floor_rss);
         if (k > 0) trace.left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, storage), noise, shaft));
         const LackOfFit& left = trace.left[k];

@@ -132,6 +132,8 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
                                 join(added), last.fit.spec.text(), effect_values(last.fit, m.values.size()), m.rms.total, steps,
                                 d.incomplete ? "towards" : "to", floor));
     }
+    for (std::size_t k = 1; k <= d.recommended_step; ++k)
+        if (!d.path[k].held_at_material.empty()) f.push_back("Held at its material value: " + d.path[k].held_at_material + ".");
     if (d.incomplete)
         f.push_back(fmt::format("Something else is missing too: {} explains {:.0f} % of the excess residual, and what it leaves is above the "
                                 "noise floor of {:.3g} V ({}). No library effect added to it explains that. Model incomplete: its intervals "

@@ -107,6 +107,35 @@ bool at_noise_floor(const LackOfFit& left, double floor_tolerance, const LawAllo
     return !left.significant || left.structure < floor_tolerance + allowance.power;
 }
 
+namespace {
+
+// Whether parameter j of `fit`, real parameter k of `effect`, lies at or beyond an end of its
+// plausible range that makes the fit implausible.
+bool implausible_at_range_end(const ModelFit& fit, Eigen::Index j, const Effect& effect, std::size_t k) {
+    const bool beyond = fit.beyond_range(j);
+    if (!(beyond || fit.at_bound(j)) || !effect.range_end_implausible(k)) return false;
+    const bool at_lower = fit.values[j] <= fit.range_lower[j] + 1e-9 * (fit.range_upper[j] - fit.range_lower[j]);
+    // Zero is a magnitude's natural floor (no band, no harmonic, no delay), not an implausible value.
+    return !(at_lower && !beyond && fit.range_lower[j] == 0.0);
+}
+
+}  // namespace
+
+std::map<std::string, std::map<std::string, double>> material_values_at_range_ends(const ModelFit& fit, const Measurement& data) {
+    std::map<std::string, std::map<std::string, double>> held;
+    if (fit.spec.effects.empty()) return held;
+    const auto model = make_model(fit.spec, data);
+    Eigen::Index j = 4;
+    for (const auto& effect : model->effects())
+        for (std::size_t k = 0; k < effect->parameter_names().size(); ++k, ++j) {
+            if (!implausible_at_range_end(fit, j, *effect, k)) continue;
+            const auto value = effect->material_value(k);
+            if (!value) return {};
+            held[effect->name()][effect->parameter_names()[k]] = *value;
+        }
+    return held;
+}
+
 void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std::string>& problems) {
     if (fit.spec.effects.empty()) return;
     // The model's effects know the data's scale, and with it their ranges and what their ends mean.
@@ -121,11 +150,9 @@ void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std
     for (const auto& effect : model->effects()) {
         const Eigen::Index first = j;
         for (std::size_t k = 0; k < effect->parameter_names().size(); ++k, ++j) {
+            if (!implausible_at_range_end(fit, j, *effect, k)) continue;
             const bool beyond = fit.beyond_range(j);
-            if (!(beyond || fit.at_bound(j)) || !effect->range_end_implausible(k)) continue;
             const bool at_lower = fit.values[j] <= fit.range_lower[j] + 1e-9 * (fit.range_upper[j] - fit.range_lower[j]);
-            // Zero is a magnitude's natural floor (no band, no harmonic, no delay), not an implausible value.
-            if (at_lower && !beyond && fit.range_lower[j] == 0.0) continue;
             const std::string meaning = effect->range_end_meaning(k, !at_lower);
             problems.push_back(fmt::format("{} = {:.4g} {} {} {} end of its plausible range{} [{:g}, {:g}]{}{}",
                                            fit.names[static_cast<std::size_t>(j)], fit.values[j], fit.units[static_cast<std::size_t>(j)],

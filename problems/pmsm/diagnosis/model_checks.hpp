@@ -1,6 +1,7 @@
 #pragma once
 // Checks of a fitted model against the data: held-out prediction, plausibility of its values, the
 // values each segment asks for and their drifts, and what an unidentifiable effect would do.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,11 @@ void check_base(const ModelFit& fit, std::vector<std::string>& problems);
 // with what that end means when its effect says, and each effect's reason why the fitted machine is
 // physically impossible at the logged currents (Effect::implausible_reason).
 void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std::string>& problems);
+
+// The effect parameters of `fit` that check_effects finds at an end of their plausible range, each
+// with its material value (Effect::material_value), by effect and parameter name; empty when there
+// is none, or when any of them has no material value.
+std::map<std::string, std::map<std::string, double>> material_values_at_range_ends(const ModelFit& fit, const Measurement& data);
 
 // Each free parameter refitted alone on each segment, the others held at the global fit: the value
 // that segment asks for, appended to each segment's `apparent` (and the parameter names to `names`).

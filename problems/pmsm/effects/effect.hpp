@@ -14,6 +14,7 @@
 // physically plausible range and doubles as the search box. Text parameters configure the plant only.
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -183,6 +184,11 @@ public:
     // Whether real parameter k at an end of its range makes the fit implausible: true for a physical
     // magnitude; false for a shape (a knee, an exponent), whose range is only as far as the law goes.
     virtual bool range_end_implausible(std::size_t /*k*/) const { return true; }
+    // The value real parameter k has in the machine's material, when its range is one material's
+    // spread (copper's temperature coefficient), not a span of materials; none otherwise. A fit that
+    // leaves it at an end of its plausible range is refitted with it held at this value, and kept so
+    // when the data cannot tell the two apart (docs/diagnosis.md, section 2).
+    virtual std::optional<double> material_value(std::size_t /*k*/) const { return std::nullopt; }
     // Why the whole model is physically impossible with these effect parameters p and base parameters
     // base (Rs, Ld, Lq, psi_f) at the rotor-frame currents (i_d, i_q) of the log; empty when possible.
     virtual std::string implausible_reason(const double* /*p*/, const double* /*base*/, const Eigen::ArrayXd& /*i_d*/,
