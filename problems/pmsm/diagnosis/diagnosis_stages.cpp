@@ -143,14 +143,17 @@ namespace {
 // is refitted with them held there, and the held fit becomes the step's when the data cannot tell
 // it from the free one (its loss in noise units within the chi-squared 95 % point of as many
 // degrees of freedom) and nothing else is implausible. A range end says the data pull beyond the
-// material; an interval that holds the material's value says they do not pull hard.
+// material; a small loss at the material's value says they do not pull hard.
 void hold_at_material_values(const Measurement& data, PathStep& step, const NoiseEstimate& noise, int& added_parameters) {
     std::vector<std::string> problems;
     check_base(step.fit, problems);
     if (!problems.empty()) return;
     const auto held = material_values_at_range_ends(step.fit, data);
     if (held.empty()) return;
+    // The spec with them fixed has the same parameters in the same order, so the free fit's values
+    // start the refit, the held ones replaced.
     ModelSpec spec = step.fit.spec;
+    Eigen::VectorXd start = step.fit.values;
     int count = 0;
     std::string what;
     for (auto& term : spec.effects) {
@@ -161,17 +164,9 @@ void hold_at_material_values(const Measurement& data, PathStep& step, const Nois
             ++count;
             const std::string full = term.name + "." + name;
             what += fmt::format("{}{} = {:.4g} (free: {:.4g})", what.empty() ? "" : ", ", full, value, step.fit.values[step.fit.index_of(full)]);
+            start[step.fit.index_of(full)] = value;
         }
     }
-    const auto model = make_model(spec, data);
-    const auto& names = model->parameter_names();
-    Eigen::VectorXd start(static_cast<Eigen::Index>(names.size()));
-    for (std::size_t j = 0; j < names.size(); ++j) start[static_cast<Eigen::Index>(j)] = step.fit.values[step.fit.index_of(names[j])];
-    for (const auto& term : spec.effects)
-        for (const auto& [name, value] : term.fixed) {
-            const auto at = std::find(names.begin(), names.end(), term.name + "." + name);
-            if (at != names.end()) start[at - names.begin()] = value;
-        }
     FitOptions options;
     options.intervals = false;
     options.keep_residual = false;
