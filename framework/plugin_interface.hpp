@@ -16,7 +16,9 @@
 // 8: Effect gained unseen_bias (a virtual: what it does to the base parameters that no log shows).
 // 9: ModelState gained ld and lq (the inductances of the present run, for terms proportional to them).
 // 10: Effect's narrow_range became plausible_range, which may reach beyond the declared range.
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 11
+// 11: Effect gained material_value (a virtual: a parameter's value in the machine's material).
+// 12: Effect gained law_terms (a virtual: the separate terms of its law, which a search may drop).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 12
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

@@ -75,3 +75,63 @@ TEST_CASE("a path step writes its change as the JSON and the text do", "[pmsm][d
     step.kind = StepKind::Pruned;
     CHECK(step.change() == "-deadtime");
 }
+
+TEST_CASE("a law of several terms that the operating points cannot pin whole is added with fewer terms, and never to clean data",
+          "[pmsm][diagnosis][search][hidden]") {
+    // The device servo's saturating iron (a co-energy of the stored magnetic energy, which shares no
+    // code with the saturation law the diagnosis fits) on its nine operating points: the whole law's
+    // six parameters do not predict left-out points (seed 1: 2 of 9), a law with fewer terms may.
+    // Seeds and a noise level the study does not use (experiments/pmsm/detection_study.toml: seeds
+    // 1-20, 1 mA); the same drives without saturation as the control. Measured (2026-11-26): found
+    // alone in 10 of 10 drives at 1 mA and 7 of 10 at 2 mA, where the whole law had too little evidence
+    // for its six parameters in every drive (found in none before); the clean drives 20 of 20 at base.
+    const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_diagnosis_profile.toml";
+    const auto law = make_effect("saturation");
+    const auto saturation_terms = law->law_terms();
+    const auto& defaults = law->values();
+    const auto& names = law->parameter_names();
+    for (const double current_noise : {1e-3, 2e-3}) {
+        int found = 0, reduced = 0, clean_quiet = 0;
+        constexpr int seeds = 10;
+        for (int seed = 101; seed < 101 + seeds; ++seed) {
+            for (const double saturation_current : {0.0, 0.3}) {
+                auto drive = read_simulation_profile(profile);
+                drive.seed = static_cast<std::uint64_t>(seed);
+                drive.noise.current = current_noise;
+                drive.device->saturation.saturation_current = saturation_current;
+                DiagnosisOptions options;
+                options.pole_pairs = drive.motor.pole_pairs;
+                const Diagnosis d = diagnose(simulate(drive).data, parse_model_spec("base"), options);
+                INFO("noise " << current_noise << " A, seed " << seed << ", saturation current " << saturation_current << " A: recommended "
+                              << d.recommended.text());
+                if (saturation_current == 0.0) {
+                    clean_quiet += d.recommended.effects.empty() ? 1 : 0;
+                    continue;
+                }
+                if (d.recommended.effects.size() != 1 || d.recommended.effects.front().name != "saturation") continue;
+                ++found;
+                const auto& held = d.recommended.effects.front().fixed;
+                if (held.empty()) continue;
+                ++reduced;
+                // Whole terms are held, each at the defaults that drop it, and the finding says why.
+                for (const auto& term : saturation_terms) {
+                    const bool dropped = held.count(names[term.front()]) > 0;
+                    for (const auto k : term) {
+                        CHECK(held.count(names[k]) == (dropped ? 1U : 0U));
+                        if (dropped) CHECK(held.at(names[k]) == defaults[static_cast<Eigen::Index>(k)]);
+                    }
+                }
+                CHECK(held.size() < names.size());
+                CHECK(std::any_of(d.findings.begin(), d.findings.end(), [](const std::string& f) {
+                    return f.rfind("Only the terms of its law this log pins: saturation with ", 0) == 0 &&
+                           f.find("the whole law, with 6 parameters, ") != std::string::npos;
+                }));
+            }
+        }
+        INFO("noise " << current_noise << " A: saturation found alone in " << found << " of " << seeds << " drives (" << reduced
+                      << " with fewer terms); clean drives left at base: " << clean_quiet);
+        CHECK(found >= (current_noise < 1.5e-3 ? 9 : 5));
+        CHECK(reduced >= 1);
+        CHECK(clean_quiet == seeds);
+    }
+}

@@ -20,6 +20,7 @@ namespace {
 
 struct DiagnoseCommandOptions : ModelCommandOptions {
     std::string report;
+    bool whole_laws = false;
 };
 
 const bool registered = register_command("diagnose", [](CLI::App& app) {
@@ -28,6 +29,9 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     add_model_options(cmd, *o, "model to diagnose, e.g. base or base+deadtime (docs/effects.md)",
                       "write the diagnosis as JSON here");
     cmd->add_option("--report", o->report, "write report.md with PNG plots, and report.html (one page, plots inline), into this directory");
+    cmd->add_flag("--whole-laws", o->whole_laws,
+                  "add an effect of several terms (saturation) only as its whole law, never with fewer terms when the log's operating "
+                  "points cannot pin them all (docs/diagnosis.md, section 1)");
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
@@ -54,6 +58,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         pmsm::DiagnosisOptions options;
         options.fit = fit_options(*o);
         options.pole_pairs = columns.pole_pairs.value_or(0);
+        options.reduced_laws = !o->whole_laws;
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())

@@ -26,6 +26,9 @@ struct DiagnosisOptions {
     FitOptions fit;
     bool leave_one_out = true;  // leave-one-segment-out prediction (needs 3 segments or more)
     int max_effects = 6;        // effects the search over sets may add to the model
+    // Whether the search may add a law of several terms (Effect::law_terms) with fewer of them when
+    // the whole law does not predict held-out segments (docs/diagnosis.md, section 1).
+    bool reduced_laws = true;
     // A set reaches the noise floor when its residual has no significant structure, or structure
     // with less than this fraction of the noise power (the steady-state model's own error on effects
     // that make the currents ripple, docs/effects.md).
@@ -138,6 +141,9 @@ struct PathStep {
     // at their material values (Effect::material_value) is as good as far as the data can tell: what
     // was held, in words; the step's fit is then the held one.
     std::string held_at_material;
+    // When the effect added is its law with fewer terms, because the whole law does not predict
+    // held-out segments: which terms, and why, in words (the step's fit is the reduced law's).
+    std::string reduced_law;
 
     // The change as the JSON and the text write it: "+effect", "-effect", empty for the start.
     std::string change() const {

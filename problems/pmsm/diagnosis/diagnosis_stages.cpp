@@ -207,6 +207,7 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
         if (!step.plausible && k > 0) hold_at_material_values(data, step, path_noise, added_parameters);
         step.kind = s.kind;
         step.effect = s.effect;
+        step.reduced_law = s.reduced_law;
         step.delta_bic = k == 0 ? 0.0 : -likelihood_ratio(search.steps[k - 1].fit, step.fit, path_noise) + added_parameters * log_n;
         step.explained = explained_fraction(model, step.fit, floor_rss);
         if (k > 0) trace.left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, storage), noise, shaft));

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <boost/math/distributions/chi_squared.hpp>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -35,6 +38,51 @@ std::vector<Addition> fit_additions(const Measurement& data, const ModelSpec& sp
     return out;
 }
 
+namespace {
+
+// `effect`'s law with fewer of its terms (Effect::law_terms) added to `current`: each proper subset
+// of them kept, the others held at their defaults, fitted as fit_additions fits the whole law.
+std::vector<Addition> reduced_laws(const Measurement& data, const ModelFit& current, const std::string& effect, const FitOptions& options) {
+    const auto law = make_effect(effect);
+    const auto terms = law->law_terms();
+    if (terms.size() < 2) return {};
+    std::vector<ModelSpec> specs;
+    const std::size_t whole = (std::size_t{1} << terms.size()) - 1;
+    for (std::size_t kept = 1; kept < whole; ++kept) {
+        EffectTerm term{effect, {}};
+        for (std::size_t t = 0; t < terms.size(); ++t)
+            if (((kept >> t) & 1U) == 0)
+                for (const auto k : terms[t]) term.fixed[law->parameter_names()[k]] = law->values()[static_cast<Eigen::Index>(k)];
+        specs.push_back(current.spec);
+        specs.back().effects.push_back(std::move(term));
+    }
+    std::vector<Addition> out(specs.size());
+    tbb::parallel_for(std::size_t{0}, specs.size(), [&](std::size_t k) {
+        tbb::this_task_arena::isolate([&] {
+            const auto model = make_model(specs[k], data);
+            Eigen::VectorXd start = model->parameters_of(MotorParameters{});
+            start.head(current.values.size()) = current.values;
+            const auto free = free_parameters(specs[k]);
+            std::vector<Eigen::Index> search;
+            for (Eigen::Index j = current.values.size(); j < start.size(); ++j)
+                if (free[static_cast<std::size_t>(j)]) search.push_back(j);
+            out[k] = {effect, fit_model(data, specs[k], options, &start, search), static_cast<int>(search.size())};
+        });
+    });
+    return out;
+}
+
+// "d_even only (q_self, q_knee, ... held at their defaults)": what a reduced law keeps and holds.
+std::string kept_and_held(const Addition& reduced) {
+    const EffectTerm& term = reduced.fit.spec.effects.back();
+    const auto law = make_effect(term.name);
+    std::vector<std::string> kept, held;
+    for (const auto& name : law->parameter_names()) (term.fixed.count(name) ? held : kept).push_back(name);
+    return fmt::format("{} only ({} held at their defaults)", fmt::join(kept, ", "), fmt::join(held, ", "));
+}
+
+}  // namespace
+
 RoundChoice choose_addition(const Measurement& data, const Measurement& design, const ModelFit& current, const std::vector<Addition>& round,
                             const WindowNoise& data_noise, const DiagnosisOptions& options) {
     std::vector<const ModelFit*> fits{&current};
@@ -59,23 +107,60 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
         const LackOfFit left = lack_of_fit(data, current, residual_of(data, current, storage), noise);
         if (at_noise_floor(left, options.floor_tolerance, law_allowance(data, current, noise))) share = most_of_the_excess;
     }
-    std::vector<std::pair<double, const Addition*>> supported;
-    for (const auto& a : round) {
-        const double dbic = -likelihood_ratio(current, a.fit, noise) + a.added_parameters * log_n;
-        if (dbic > supported_bic) continue;
+    // Whether an addition removes a relevant share of the excess and changes the voltage by a relevant amount.
+    const auto relevant = [&](const Addition& a) {
         const double change = current.rss() - a.fit.rss();
-        if (excess > 0.0 && change < share * excess) continue;
-        if (!(std::sqrt(std::max(change, 0.0) / (2.0 * rows)) >= relevant_voltage * resolution)) continue;
+        if (excess > 0.0 && change < share * excess) return false;
+        return std::sqrt(std::max(change, 0.0) / (2.0 * rows)) >= relevant_voltage * resolution;
+    };
+    // The evidence for an addition (dBIC), when it is supported, relevant and identifiable.
+    const auto evidence_for = [&](const Addition& a) -> std::optional<double> {
+        const double dbic = -likelihood_ratio(current, a.fit, noise) + a.added_parameters * log_n;
+        if (dbic > supported_bic || !relevant(a)) return std::nullopt;
         if (identifiability_of(most_distinct(design_unique_fractions(design, current.spec, current.values, a.effect))) ==
             Identifiability::NotIdentifiable)
-            continue;
-        supported.emplace_back(dbic, &a);
-    }
+            return std::nullopt;
+        return dbic;
+    };
+    std::vector<std::pair<double, const Addition*>> supported;
+    for (const auto& a : round)
+        if (const auto dbic = evidence_for(a)) supported.emplace_back(*dbic, &a);
     std::stable_sort(supported.begin(), supported.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     const std::vector<double> current_folds =
         options.leave_one_out ? leave_one_segment_out(data, current) : std::vector<double>{};
     RoundChoice choice;
     std::size_t chosen = supported.size();
+    double reduced_dbic = 0.0;
+    FitOptions compared = options.fit;
+    compared.intervals = false;
+    compared.keep_residual = false;
+    // A law of several terms that the log cannot pin as a whole (too many parameters for its evidence,
+    // or for its operating points to predict each other) may still be pinned with fewer. The reduced
+    // law with the strongest evidence is chosen by its evidence alone, and then held to the held-out
+    // test once, as any addition is: testing each of the subsets against the held-out segments and
+    // keeping one that passes would pass one by chance. `why`: how the whole law failed.
+    const auto offer_reduced = [&](const Addition& a, const std::string& why) {
+        if (!options.reduced_laws) return;
+        std::optional<Addition> strongest;
+        double strongest_dbic = 0.0;
+        for (auto& r : reduced_laws(data, current, a.effect, compared))
+            if (const auto dbic = evidence_for(r); dbic && (!strongest || *dbic < strongest_dbic)) {
+                strongest_dbic = *dbic;
+                strongest = std::move(r);
+            }
+        if (!strongest || (choice.reduced && strongest_dbic >= reduced_dbic)) return;
+        std::string predicts;
+        if (!current_folds.empty()) {
+            const HeldOutComparison held_out = compare_held_out(data, strongest->fit, current_folds);
+            if (!held_out.predicts()) return;
+            predicts = fmt::format(" and predicts {} of {} left-out segments better", held_out.better, held_out.folds.size());
+        }
+        reduced_dbic = strongest_dbic;
+        choice.reduced_law = fmt::format("{} with {}: the whole law, with {} parameters, {}; with {} it has dBIC {:.1f}{}", a.effect,
+                                         kept_and_held(*strongest), a.added_parameters, why, strongest->added_parameters, strongest_dbic,
+                                         predicts);
+        choice.reduced = std::make_shared<const Addition>(std::move(*strongest));
+    };
     for (std::size_t k = 0; k < supported.size() && chosen == supported.size(); ++k) {
         const Addition& a = *supported[k].second;
         if (current_folds.empty()) {
@@ -89,16 +174,39 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
         }
         choice.unpredictive.push_back({a.effect, supported[k].first, excess > 0.0 ? (current.rss() - a.fit.rss()) / excess : 0.0,
                                        a.added_parameters, held_out.better, static_cast<int>(held_out.folds.size())});
+        offer_reduced(a, fmt::format("predicts only {} of {} left-out segments better than {}", held_out.better, held_out.folds.size(),
+                                     current.spec.text()));
     }
-    if (chosen == supported.size()) return choice;
-    choice.best = supported[chosen].second;
+    // A whole law whose evidence does not pay for its parameters, although it removes more than
+    // chance would (a likelihood-ratio test, p < 0.001) and a relevant part of the excess: a law with
+    // fewer terms, which removes no more than the whole, may pay.
+    for (const auto& a : round) {
+        if (std::any_of(supported.begin(), supported.end(), [&](const auto& x) { return x.second == &a; }) || !relevant(a)) continue;
+        const double ratio = likelihood_ratio(current, a.fit, noise);
+        if (a.added_parameters < 1 || !(ratio > boost::math::quantile(boost::math::chi_squared(a.added_parameters), 1.0 - 1e-3))) continue;
+        offer_reduced(a, fmt::format("has too little evidence for them (dBIC {:+.1f}), although it removes more than chance would",
+                                     -ratio + a.added_parameters * log_n));
+    }
+    double best_dbic = 0.0;
+    if (chosen < supported.size() && !(choice.reduced && reduced_dbic < supported[chosen].first)) {
+        choice.best = supported[chosen].second;
+        best_dbic = supported[chosen].first;
+        choice.reduced.reset();
+        choice.reduced_law.clear();
+    } else if (choice.reduced) {
+        choice.best = choice.reduced.get();
+        best_dbic = reduced_dbic;
+    } else {
+        return choice;
+    }
     const Addition& best = *choice.best;
     // A tie: another supported effect that the evidence does not separate from the best, or that
     // the design cannot tell apart from it at all.
     choice.tie.push_back(best.effect);
-    for (std::size_t k = chosen + 1; k < supported.size(); ++k) {
+    for (std::size_t k = 0; k < supported.size(); ++k) {
         const auto& other = *supported[k].second;
-        const bool close = supported[k].first - supported[chosen].first < tie_margin;
+        if (other.effect == best.effect || supported[k].first < best_dbic) continue;
+        const bool close = supported[k].first - best_dbic < tie_margin;
         const bool confounded =
             !close && std::max(most_distinct(design_unique_fractions(design, current.spec, current.values, other.effect, best.effect)),
                                most_distinct(design_unique_fractions(design, current.spec, current.values, best.effect, other.effect))) <
@@ -170,7 +278,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
             break;
         }
         const Addition& best = *choice.best;
-        s.steps.push_back({best.fit, StepKind::Added, best.effect, best.added_parameters});
+        s.steps.push_back({best.fit, StepKind::Added, best.effect, best.added_parameters, choice.reduced_law});
         std::vector<std::string> rest;
         for (const auto& e : library)
             if (!best.fit.spec.contains(e)) rest.push_back(e);

@@ -1,6 +1,7 @@
 #pragma once
 // The search over sets of effects (docs/effects.md, "Several effects at once"): forward selection of
 // library effects with backward pruning.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@ struct SearchStep {
     StepKind kind = StepKind::Start;
     std::string effect;        // added or pruned; empty for the start
     int added_parameters = 0;  // negative when pruned
+    std::string reduced_law;   // RoundChoice::reduced_law of the addition
 };
 
 struct SetSearch {
@@ -41,7 +43,11 @@ struct SetSearch {
 // One round of forward selection from `current`: the supported addition with the strongest evidence
 // that the design can identify and that predicts held-out segments, and the effects tied with it.
 struct RoundChoice {
-    const Addition* best = nullptr;  // into the round; none when no addition qualifies
+    const Addition* best = nullptr;  // into the round or `reduced`; none when no addition qualifies
+    // When the best is an effect's law with fewer terms (Effect::law_terms), because the whole law
+    // does not predict held-out segments: that addition, and why, in words.
+    std::shared_ptr<const Addition> reduced;
+    std::string reduced_law;
     std::vector<std::string> tie;    // the best first, then each effect the evidence or the design cannot separate from it
     // Supported additions with stronger evidence than the best (all of them, without a best) that
     // predict too few held-out segments.

@@ -134,6 +134,10 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
     }
     for (std::size_t k = 1; k <= d.recommended_step; ++k)
         if (!d.path[k].held_at_material.empty()) f.push_back("Held at its material value: " + d.path[k].held_at_material + ".");
+    for (std::size_t k = 1; k <= d.recommended_step; ++k)
+        if (!d.path[k].reduced_law.empty())
+            f.push_back("Only the terms of its law this log pins: " + d.path[k].reduced_law +
+                        ". More operating points (other currents and speeds) would show whether the other terms are there.");
     if (d.incomplete)
         f.push_back(fmt::format("Something else is missing too: {} explains {:.0f} % of the excess residual, and what it leaves is above the "
                                 "noise floor of {:.3g} V ({}). No library effect added to it explains that. Model incomplete: its intervals "

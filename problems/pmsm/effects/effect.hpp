@@ -189,6 +189,11 @@ public:
     // leaves it at an end of its plausible range is refitted with it held at this value, and kept so
     // when the data cannot tell the two apart (docs/diagnosis.md, section 2).
     virtual std::optional<double> material_value(std::size_t /*k*/) const { return std::nullopt; }
+    // The law's separate terms, each the real parameters only it uses, its size first: held at their
+    // declared defaults (a size's default is zero) they drop that term. A law of several terms that
+    // the log's operating points cannot pin as a whole is offered to the search with fewer of them
+    // (docs/diagnosis.md, section 1). Empty: the law is one term.
+    virtual std::vector<std::vector<std::size_t>> law_terms() const { return {}; }
     // Why the whole model is physically impossible with these effect parameters p and base parameters
     // base (Rs, Ld, Lq, psi_f) at the rotor-frame currents (i_d, i_q) of the log; empty when possible.
     virtual std::string implausible_reason(const double* /*p*/, const double* /*base*/, const Eigen::ArrayXd& /*i_d*/,

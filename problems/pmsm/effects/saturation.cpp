@@ -59,6 +59,10 @@ public:
         }
     }
 
+    // q self-saturation with its knee, cross-saturation with its exponent, the d axis's asymmetry,
+    // the second-order cross term.
+    std::vector<std::vector<std::size_t>> law_terms() const override { return {{0, 1}, {2, 3}, {4}, {5}}; }
+
     // Fitted directly to the Baldor machine's measured map over i_d from -12 to 0 A and |i_q| up to
     // 24 A, the law leaves 1.9 % of the flux linkage rms (docs/effects.md, "The Baldor study").
     double law_accuracy() const override { return 0.02; }

@@ -73,6 +73,7 @@ json diagnosis_json(const Diagnosis& d) {
                         {"at_noise_floor", step.at_noise_floor}});
         // Only where a law states an error: the structure it may leave, relative to the noise power.
         if (!step.allowance.source.empty()) path.back()["law_allowance"] = {{"law", step.allowance.source}, {"power", step.allowance.power}};
+        if (!step.reduced_law.empty()) path.back()["reduced_law"] = step.reduced_law;
     }
     out["path"] = path;
     out["recommended_step"] = d.recommended_step;
