@@ -42,10 +42,12 @@ const char* unit_of(const std::string& variable) {
     return "A";
 }
 
+// The fitted effect parameters from index `from` on; the held ones are in the model's name.
 std::string effect_values(const ModelFit& fit, Eigen::Index from) {
     std::string values;
     for (Eigen::Index j = from; j < fit.values.size(); ++j)
-        values += fmt::format("{}{} = {:.4g}{}{}", values.empty() ? "" : ", ", fit.names[static_cast<std::size_t>(j)], fit.values[j],
+        if (fit.free[static_cast<std::size_t>(j)])
+            values += fmt::format("{}{} = {:.4g}{}{}", values.empty() ? "" : ", ", fit.names[static_cast<std::size_t>(j)], fit.values[j],
                               fit.units[static_cast<std::size_t>(j)].empty() ? "" : " ", fit.units[static_cast<std::size_t>(j)]);
     return values;
 }
