@@ -67,6 +67,20 @@ def test_diagnose_gives_the_command_lines_recommendation_and_writes_the_report(s
     assert pathlib.Path(diagnosis.report_html).is_file()
 
 
+def test_diagnose_offers_a_law_with_fewer_terms_unless_whole_laws():
+    # An example, one drive: seed 1 of the device study's clear saturation, whose nine operating points
+    # do not pin the whole law (tests/pmsm_effect_set_search_test.cpp has the rates).
+    import tomllib
+    with open(PROFILE.parent / "device_diagnosis_profile.toml", "rb") as f:
+        profile = tomllib.load(f)
+    profile["plant"]["saturation"]["saturation_current"] = 0.3
+    drive = mhbench.pmsm.simulate(profile, seed=1)
+    reduced = mhbench.pmsm.diagnose(drive.data)
+    assert reduced.recommended.startswith("base+saturation(")
+    assert any(f.startswith("Only the terms of its law this log pins: saturation with ") for f in reduced.findings)
+    assert mhbench.pmsm.diagnose(drive.data, whole_laws=True).recommended == "base"
+
+
 def test_simulate_with_effects_and_seed(simulated, tmp_path):
     _, clean = simulated
     result = mhbench.pmsm.simulate(PROFILE, effects={"deadtime": {}}, seed=7, out=tmp_path / "d.csv")

@@ -101,12 +101,14 @@ def fit(data, model: str = "base", *, optimizer: str = "cmaes", evaluations: int
 
 def diagnose(data, model: str = "base", *, optimizer: str = "cmaes", evaluations: int = 0, seed: int = 1,
              settle: float = 0.0, search_rows: Optional[int] = None, columns: Optional[dict] = None,
-             pole_pairs: int = 0, threads: Optional[int] = None, report=None) -> DiagnosisResult:
+             pole_pairs: int = 0, threads: Optional[int] = None, report=None,
+             whole_laws: bool = False) -> DiagnosisResult:
     """Diagnoses a model against data, as `mhbench diagnose` does: where it fails, which library effect is
     most likely missing and how sure, and the model to fit next. report: a directory to write report.md,
-    the plots and report.html into. Options as for fit."""
+    the plots and report.html into. whole_laws: add a law of several terms (saturation) only whole, as
+    `--whole-laws` does (docs/diagnosis.md, section 1). Options as for fit."""
     record = _bindings.diagnose(data, model, optimizer, evaluations, seed, settle, search_rows, columns, pole_pairs,
-                                threads, report)
+                                threads, report, whole_laws)
     return DiagnosisResult(model=record["model"], recommended=record["recommended"],
                            findings=list(record["report"].get("findings", [])), report=record["report"],
                            text=record["text"], report_html=record.get("report_html"))

@@ -170,11 +170,12 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
 
 py::dict diagnose(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations,
                   py::handle seed, double settle, py::handle search_rows, py::handle columns, int pole_pairs,
-                  py::handle threads, py::handle report) {
+                  py::handle threads, py::handle report, bool whole_laws) {
     const auto spec = parse_model_spec(model);
     DiagnosisOptions options;
     options.fit = fit_options_of(optimizer, evaluations, seed, search_rows);
     options.pole_pairs = pole_pairs;
+    options.reduced_laws = !whole_laws;
     auto measurement = measurement_of(data, settle, columns, pole_pairs);
     // The report shows a raw log as read, with the windows found in it.
     std::optional<Measurement> raw_log;
@@ -264,7 +265,7 @@ void bind_pmsm(py::module_& m) {
           py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"), py::arg("threads"));
     m.def("diagnose", &diagnose, py::arg("data"), py::arg("model"), py::arg("optimizer"), py::arg("evaluations"),
           py::arg("seed"), py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"),
-          py::arg("threads"), py::arg("report"));
+          py::arg("threads"), py::arg("report"), py::arg("whole_laws"));
     m.def("simulate", &simulate, py::arg("profile"), py::arg("base_directory"), py::arg("seed"), py::arg("out"));
 }
 
