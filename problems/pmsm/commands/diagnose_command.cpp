@@ -63,7 +63,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())
             fmt::print("\nnext: mhbench fit --data {}{} --model {}\n", shell_word(o->data), data_reading_options(*o),
-                       diagnosis.recommended.text());
+                       shell_word(diagnosis.recommended.text()));
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;

@@ -12,6 +12,7 @@
 
 #include "framework/cli/option_ranges.hpp"
 #include "framework/input_error.hpp"
+#include "framework/shell_word.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/data/column_map.hpp"
 #include "problems/pmsm/data/measurement.hpp"
@@ -115,16 +116,6 @@ inline std::optional<pmsm::OperatingPoints> find_operating_points_option(const M
     auto points = pmsm::segment_at_operating_points(data, o.steady);
     if (points) std::printf("%s\n\n", pmsm::operating_points_summary(*points).c_str());
     return points;
-}
-
-// `text` as one shell word: bare when it holds only characters no shell acts on, else single-quoted.
-inline std::string shell_word(const std::string& text) {
-    const bool bare = !text.empty() && text.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
-                                                              "0123456789_./=,:+-") == std::string::npos;
-    if (bare) return text;
-    std::string out = "'";
-    for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
 }
 
 // The options after --data's value that read the data as this command did, for the commands it

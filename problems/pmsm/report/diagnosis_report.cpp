@@ -18,6 +18,7 @@
 #include "framework/input_error.hpp"
 #include "framework/plots.hpp"
 #include "framework/provenance.hpp"
+#include "framework/shell_word.hpp"
 
 namespace mhb::pmsm {
 namespace fs = std::filesystem;
@@ -88,10 +89,11 @@ void add_summary(Document& doc, const Diagnosis& d, const DiagnosisPlots& png, c
                                       : (d.incomplete ? " (and something else is missing: see the findings)" : ""))});
     add_image(doc, png.path, "residual after each step of the search");
     if (d.recommended.text() != m.spec.text() || !d.tie.empty()) {
-        const std::string next = d.recommended.text() != m.spec.text() ? d.recommended.text() : m.spec.with(d.tie.front()).text();
+        const std::string next = shell_word(d.recommended.text() != m.spec.text() ? d.recommended.text() : m.spec.with(d.tie.front()).text());
         doc.add(Paragraph{"Next step:"});
-        doc.add(Preformatted{fmt::format("mhbench fit --data {}{} --model {}\nmhbench diagnose --data {}{} --model {} --report <dir>", data_path,
-                                         data_options, next, data_path, data_options, next)});
+        const std::string data_word = shell_word(data_path);
+        doc.add(Preformatted{fmt::format("mhbench fit --data {}{} --model {}\nmhbench diagnose --data {}{} --model {} --report <dir>", data_word,
+                                         data_options, next, data_word, data_options, next)});
     }
 }
 
