@@ -83,8 +83,8 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
     // six parameters do not predict left-out points (seed 1: 2 of 9), a law with fewer terms may.
     // Seeds and a noise level the study does not use (experiments/pmsm/detection_study.toml: seeds
     // 1-20, 1 mA); the same drives without saturation as the control. Measured (2026-11-26): found
-    // alone in 10 of 10 drives at 1 mA and 7 of 10 at 2 mA, where the whole law had too little evidence
-    // for its six parameters in every drive (found in none before); the clean drives 20 of 20 at base.
+    // alone in 10 of 10 drives at 1 mA and 7 of 10 at 2 mA, all 7 with fewer terms (found in none
+    // before); the clean drives 20 of 20 at base.
     const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_diagnosis_profile.toml";
     const auto law = make_effect("saturation");
     const auto saturation_terms = law->law_terms();
