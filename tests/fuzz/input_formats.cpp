@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include <fcntl.h>
+#include <hdf5.h>
 #include <unistd.h>
 
 #include "framework/experiment_config.hpp"
@@ -67,6 +68,16 @@ private:
 };
 
 void parse_binary_file(const std::string& bytes, pmsm::MeasurementFormat format, ScratchFile& file) {
+    // libhdf5 keeps state from one file to the next (identifiers, free lists, caches), which a damaged
+    // file can leave inconsistent: then a later, harmless input faults, and the finding names the
+    // wrong input. The program reads each file in a child process of its own, which starts clean, so
+    // the fuzzer closes the library after each input that reached it (it reopens on its next call).
+    struct CloseLibhdf5 {
+        bool used;
+        ~CloseLibhdf5() {
+            if (used) H5close();
+        }
+    } close_afterwards{format != pmsm::MeasurementFormat::Mat5};
     // In this process: the fuzzer looks for the faults a child process would turn into refusals.
     pmsm::read_binary_measurement(file.holding(bytes), format, {}, pmsm::Isolation::in_process);
 }
