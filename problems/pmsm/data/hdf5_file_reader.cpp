@@ -361,6 +361,9 @@ TextColumn Hdf5File::read_strings(Planned& p) const {
     const hid_t dataset = p.dataset.get();
     const bool variable = H5Tis_variable_str(p.type.get()) > 0;
     const std::size_t width = variable ? sizeof(char*) : H5Tget_size(p.type.get());
+    // Checked when planned, but the library may answer differently now, after reading other
+    // columns of a damaged file (fuzz_hdf5: 0 here, then a fault inside malloc).
+    if (width == 0) refuse(p.field, "fixed-length strings of 0 bytes (the file is damaged)");
     const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(memory.get(), variable ? H5T_VARIABLE : width);
     // UTF-8 stays UTF-8 (h5py writes its strings so); the library converts nothing between sets.
