@@ -102,6 +102,9 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     // base misses the offset, so its intervals are not valid; the recommended model's are.
     CHECK(j["intervals_valid"] == false);
     CHECK(j["recommended_intervals_valid"] == true);
+    // An encoder offset states no bias beyond its intervals, and no law was reduced.
+    CHECK(j["recommended_interval_caveats"].is_array());
+    CHECK(j["recommended_interval_caveats"].empty());
     CHECK(run.output.find("Model incomplete: the 95 % intervals of base are not valid") != std::string::npos);
     // A limit for each size of each effect left out: none for the recommended offset, none for a shape.
     bool dead_time_voltage = false;

@@ -84,14 +84,15 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
     // Seeds and a noise level the study does not use (experiments/pmsm/detection_study.toml: seeds
     // 1-20, 1 mA); the same drives without saturation as the control. Measured (2026-11-26): found
     // alone in 10 of 10 drives at 1 mA and 7 of 10 at 2 mA, all 7 with fewer terms (found in none
-    // before); the clean drives 20 of 20 at base.
+    // before); the clean drives 20 of 20 at base. Of the Ld, Lq and psi_f intervals of the drives
+    // found with fewer terms, 0 missed the plant's value at 1 mA and 5 at 2 mA, each with its caveat.
     const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_diagnosis_profile.toml";
     const auto law = make_effect("saturation");
     const auto saturation_terms = law->law_terms();
     const auto& defaults = law->values();
     const auto& names = law->parameter_names();
     for (const double current_noise : {1e-3, 2e-3}) {
-        int found = 0, reduced = 0, clean_quiet = 0;
+        int found = 0, reduced = 0, clean_quiet = 0, missed_intervals = 0;
         constexpr int seeds = 10;
         for (int seed = 101; seed < 101 + seeds; ++seed) {
             for (const double saturation_current : {0.0, 0.3}) {
@@ -122,6 +123,23 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
                     }
                 }
                 CHECK(held.size() < names.size());
+                // The held terms pull the inductances: an interval of Ld, Lq or psi_f that misses the
+                // plant's small-current value comes with the caveat that names it. (Rs is left out:
+                // current sampled at the carrier peak in saturating iron biases it by 0.15 %, which
+                // no caveat states yet; docs/effects.md.)
+                const ModelFit& fit = d.path[d.recommended_step].fit;
+                FitOptions with_intervals;
+                with_intervals.intervals = true;
+                const ModelFit polished = polish_model(simulate(drive).data, fit.spec, fit.values, with_intervals);
+                const Eigen::Vector4d truth(drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f);
+                for (std::size_t j = 1; j < 4; ++j) {
+                    const auto k = static_cast<Eigen::Index>(j);
+                    INFO(fit.names[j] << " interval [" << polished.lower[k] << ", " << polished.upper[k] << "], plant " << truth[k]);
+                    if (!(polished.lower[k] <= truth[k] && truth[k] <= polished.upper[k])) {
+                        ++missed_intervals;
+                        CHECK(d.recommended_interval_marked(j));
+                    }
+                }
                 CHECK(std::any_of(d.findings.begin(), d.findings.end(), [](const std::string& f) {
                     return f.rfind("Only the terms of its law this log pins: saturation with ", 0) == 0 &&
                            f.find("the whole law, with 6 parameters, ") != std::string::npos;
@@ -129,7 +147,8 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
             }
         }
         INFO("noise " << current_noise << " A: saturation found alone in " << found << " of " << seeds << " drives (" << reduced
-                      << " with fewer terms); clean drives left at base: " << clean_quiet);
+                      << " with fewer terms, " << missed_intervals << " intervals missing the plant's value, each marked); clean "
+                      << "drives left at base: " << clean_quiet);
         CHECK(found >= (current_noise < 1.5e-3 ? 9 : 5));
         CHECK(reduced >= 1);
         CHECK(clean_quiet == seeds);

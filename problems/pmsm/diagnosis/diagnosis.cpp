@@ -3,6 +3,7 @@
 #include "problems/pmsm/diagnosis/detection_limits.hpp"
 #include "problems/pmsm/diagnosis/diagnosis_stages.hpp"
 #include "problems/pmsm/diagnosis/findings.hpp"
+#include "problems/pmsm/diagnosis/interval_caveats.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
 
 namespace mhb::pmsm {
@@ -70,6 +71,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.detection_limits = detection_limits(design, data.size(), recommended, screen.library, out.noise);
     for (const auto& h : trace.left[r.step].mechanical_harmonics)
         if (h.significant) out.mechanical_left.push_back(h);
+    out.interval_caveats = interval_caveats(data, out, options.fit);
     out.findings = findings_of(out, trace.left[r.step], options.floor_tolerance);
     return out;
 }

@@ -144,6 +144,8 @@ struct PathStep {
     // When the effect added is its law with fewer terms, because the whole law does not predict
     // held-out segments: which terms, and why, in words (the step's fit is the reduced law's).
     std::string reduced_law;
+    // Then the whole law's base parameters (RoundChoice::whole_law_base); empty otherwise.
+    Eigen::VectorXd whole_law_base;
 
     // The change as the JSON and the text write it: "+effect", "-effect", empty for the start.
     std::string change() const {
@@ -232,6 +234,13 @@ struct Drift {
     double slope = 0.0;               // parameter unit per unit of the variable
 };
 
+// A reason the 95 % intervals of some of the recommended model's base parameters may not hold the
+// truth, beyond the noise they count (interval_caveats.hpp).
+struct IntervalCaveat {
+    std::string reason;            // a clause, as the findings write it after "Beyond the intervals of <model>: "
+    std::array<bool, 4> base{};    // which of Rs, Ld, Lq, psi_f it concerns
+};
+
 struct Diagnosis {
     std::string source;
     Eigen::Index samples = 0;
@@ -281,11 +290,22 @@ struct Diagnosis {
     // The harmonics at mechanical orders that the last set of the path leaves beyond chance (the
     // findings name them).
     std::vector<MechanicalHarmonic> mechanical_left;
+    // What the recommended model's intervals do not hold although it leaves only noise; the findings
+    // state each one.
+    std::vector<IntervalCaveat> interval_caveats;
 
     // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
     // only when nothing the data show is left out of it (an interval assumes the residual is noise).
     bool model_intervals_valid() const { return !missing_effect_found && !not_in_library; }
     bool recommended_intervals_valid() const { return !incomplete && !not_in_library && tie.empty() && !law_error_beyond_noise; }
+    // Whether the recommended model's interval of base parameter `j` (Rs, Ld, Lq, psi_f) comes with
+    // a mark: not valid, or a caveat that concerns it. An interval without one owes the truth.
+    bool recommended_interval_marked(std::size_t j) const {
+        if (!recommended_intervals_valid()) return true;
+        for (const auto& c : interval_caveats)
+            if (c.base[j]) return true;
+        return false;
+    }
 };
 
 // Fits `spec` to `data` and answers where it fails, what is missing and how sure that is: the

@@ -208,6 +208,7 @@ PathTrace trace_path(const Measurement& data, const SetSearch& search, const Mod
         step.kind = s.kind;
         step.effect = s.effect;
         step.reduced_law = s.reduced_law;
+        step.whole_law_base = s.whole_law_base;
         step.delta_bic = k == 0 ? 0.0 : -likelihood_ratio(search.steps[k - 1].fit, step.fit, path_noise) + added_parameters * log_n;
         step.explained = explained_fraction(model, step.fit, floor_rss);
         if (k > 0) trace.left.push_back(lack_of_fit(data, step.fit, residual_of(data, step.fit, storage), noise, shaft));

@@ -160,6 +160,7 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
                                          kept_and_held(*strongest), a.added_parameters, why, strongest->added_parameters, strongest_dbic,
                                          predicts);
         choice.reduced = std::make_shared<const Addition>(std::move(*strongest));
+        choice.whole_law_base = a.fit.values.head(4);
     };
     for (std::size_t k = 0; k < supported.size() && chosen == supported.size(); ++k) {
         const Addition& a = *supported[k].second;
@@ -193,6 +194,7 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
         best_dbic = supported[chosen].first;
         choice.reduced.reset();
         choice.reduced_law.clear();
+        choice.whole_law_base.resize(0);
     } else if (choice.reduced) {
         choice.best = choice.reduced.get();
         best_dbic = reduced_dbic;
@@ -237,7 +239,7 @@ std::optional<SearchStep> weakest_effect(const Measurement& data, const ModelSpe
         const double keep_bic = -likelihood_ratio(reduced_fit, current, noise) + removed * log_n;
         if (keep_bic > weakest_bic) {
             weakest_bic = keep_bic;
-            weakest = SearchStep{std::move(reduced_fit), StepKind::Pruned, term.name, -removed};
+            weakest = SearchStep{std::move(reduced_fit), StepKind::Pruned, term.name, -removed, {}, {}};
         }
     }
     return weakest;
@@ -253,7 +255,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
                              const std::vector<std::string>& library, const std::vector<Candidate>& first_round,
                              const DiagnosisOptions& options) {
     SetSearch s;
-    s.steps.push_back({model, StepKind::Start, "", 0});
+    s.steps.push_back({model, StepKind::Start, "", 0, {}, {}});
     s.data_noise = window_noise(data, model);
     // Fits after the first round are compared by their residuals and shown on the path without
     // intervals, so they are made without them. Each addition is polished jointly with the effects
@@ -278,7 +280,7 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
             break;
         }
         const Addition& best = *choice.best;
-        s.steps.push_back({best.fit, StepKind::Added, best.effect, best.added_parameters, choice.reduced_law});
+        s.steps.push_back({best.fit, StepKind::Added, best.effect, best.added_parameters, choice.reduced_law, choice.whole_law_base});
         std::vector<std::string> rest;
         for (const auto& e : library)
             if (!best.fit.spec.contains(e)) rest.push_back(e);

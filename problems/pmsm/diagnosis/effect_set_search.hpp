@@ -28,6 +28,7 @@ struct SearchStep {
     std::string effect;        // added or pruned; empty for the start
     int added_parameters = 0;  // negative when pruned
     std::string reduced_law;   // RoundChoice::reduced_law of the addition
+    Eigen::VectorXd whole_law_base;  // RoundChoice::whole_law_base of the addition
 };
 
 struct SetSearch {
@@ -48,6 +49,9 @@ struct RoundChoice {
     // does not predict held-out segments: that addition, and why, in words.
     std::shared_ptr<const Addition> reduced;
     std::string reduced_law;
+    // Then the base parameters (Rs, Ld, Lq, psi_f) of the whole law's fit, which the terms held at
+    // their defaults would give if they are there (interval_caveats.hpp); empty otherwise.
+    Eigen::VectorXd whole_law_base;
     std::vector<std::string> tie;    // the best first, then each effect the evidence or the design cannot separate from it
     // Supported additions with stronger evidence than the best (all of them, without a best) that
     // predict too few held-out segments.

@@ -301,8 +301,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                 d.recommended_intervals_valid() && d.recommended.text() != d.model.spec.text()
                                     ? "; those of " + d.recommended.text() + " hold as far as this log can tell"
                                     : std::string()));
-    const ModelFit& recommended = !d.path.empty() && d.path.back().fit.spec.text() == d.recommended.text() ? d.path.back().fit : d.model;
-    for (const auto& bias : recommended.unseen_biases()) f.push_back("Beyond the intervals of " + d.recommended.text() + ": " + bias + ".");
+    for (const auto& caveat : d.interval_caveats) f.push_back("Beyond the intervals of " + d.recommended.text() + ": " + caveat.reason + ".");
     data_findings(d, f);
     return f;
 }

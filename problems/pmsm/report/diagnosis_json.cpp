@@ -60,6 +60,14 @@ json diagnosis_json(const Diagnosis& d) {
     out["recommended_model"] = d.recommended.text();
     out["intervals_valid"] = d.model_intervals_valid();
     out["recommended_intervals_valid"] = d.recommended_intervals_valid();
+    json caveats = json::array();
+    for (const auto& c : d.interval_caveats) {
+        json parameters = json::array();
+        for (std::size_t j = 0; j < 4; ++j)
+            if (c.base[j]) parameters.push_back(d.model.names[j]);
+        caveats.push_back({{"reason", c.reason}, {"parameters", parameters}});
+    }
+    out["recommended_interval_caveats"] = caveats;
     json path = json::array();
     for (const auto& step : d.path) {
         path.push_back({{"model", step.fit.spec.text()},
