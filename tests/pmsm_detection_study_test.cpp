@@ -189,11 +189,20 @@ TEST_CASE("device plant, several noise seeds: clear effects found alone, in a pa
             CHECK(r.base_error.cwiseAbs().maxCoeff() < 0.05);
             for (int covered : r.covered) CHECK(covered >= 0);
         }
+        // Dead time's pulse shift is stated beside every base parameter's interval; a clean drive's
+        // intervals come without a mark and owe the truth.
+        const bool dead_time = std::find(c.truth.begin(), c.truth.end(), "deadtime") != c.truth.end();
+        for (std::size_t j = 0; j < 4; ++j) {
+            if (r.correct && dead_time) CHECK(r.interval_marked[j]);
+            if (c.kind == "clean") CHECK_FALSE(r.interval_marked[j]);
+        }
     }
     const std::string table = study_markdown(spec, run);
     CHECK_THAT(table, Catch::Contains("95 % intervals holding the truth when correct: Rs, Ld, Lq, psi_f"));
     const auto record = study_record_json(run, run.records.front());
     CHECK(record["interval_holds_truth"].size() == 4);
+    CHECK(record["interval_marked"].size() == 4);
+    CHECK_THAT(table, Catch::Contains("the same of the intervals not marked (not valid, or a stated bias)"));
     CHECK(record["structure_left"].get<double>() >= 0.0);
     CHECK_THAT(table, Catch::Contains("the same where no structure is left"));
 }

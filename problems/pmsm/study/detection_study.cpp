@@ -550,6 +550,7 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         r.tie = !d.tie.empty();
         r.incomplete = d.incomplete;
         r.intervals_valid = d.recommended_intervals_valid();
+        for (std::size_t j = 0; j < 4; ++j) r.interval_marked[j] = d.recommended_interval_marked(j);
         for (const auto& l : d.detection_limits)
             if (std::find(r.missed.begin(), r.missed.end(), l.effect) != r.missed.end()) r.missed_limits.push_back(l);
         for (const auto& effect : r.missed) {
@@ -638,6 +639,9 @@ struct CaseSummary {
     std::array<std::size_t, 4> covered{}, intervals{};
     // The same over those of them whose recommended model leaves no significant structure.
     std::array<std::size_t, 4> covered_without_structure{}, intervals_without_structure{};
+    // The same over the intervals the diagnosis did not mark (StudyRecord::interval_marked): those
+    // that owe the truth.
+    std::array<std::size_t, 4> covered_unmarked{}, intervals_unmarked{};
     // Raw logs: the noise measured from the data over the simulated, median ratio per axis, and
     // the drives in which both axes are within 20 % of it.
     std::size_t raw = 0, noise_within = 0;
@@ -662,6 +666,16 @@ std::string coverage_text(const std::array<std::size_t, 4>& covered, const std::
                                                : std::string("—"));
     const std::size_t most = *std::max_element(intervals.begin(), intervals.end());
     return most ? out + fmt::format(" % of {}", most) : std::string("—");
+}
+
+// The same, each share with its own count when the counts differ ("100 % of 20, 100 % of 20, 85 % of 13, ...").
+std::string coverage_counts_text(const std::array<std::size_t, 4>& covered, const std::array<std::size_t, 4>& intervals) {
+    if (std::adjacent_find(intervals.begin(), intervals.end(), std::not_equal_to<>()) == intervals.end()) return coverage_text(covered, intervals);
+    std::string out;
+    for (std::size_t j = 0; j < 4; ++j)
+        out += (j ? ", " : "") + (intervals[j] ? fmt::format("{:.0f} % of {}", 100.0 * static_cast<double>(covered[j]) / static_cast<double>(intervals[j]), intervals[j])
+                                               : std::string("—"));
+    return out;
 }
 
 double median(std::vector<double> v) {
@@ -699,6 +713,10 @@ std::vector<CaseSummary> summaries(const StudyRun& run) {
                 if (r.covered[j] >= 0) {
                     ++s.intervals[j];
                     s.covered[j] += static_cast<std::size_t>(r.covered[j]);
+                    if (!r.interval_marked[j]) {
+                        ++s.intervals_unmarked[j];
+                        s.covered_unmarked[j] += static_cast<std::size_t>(r.covered[j]);
+                    }
                     if (r.structure_left > 0.0) continue;
                     ++s.intervals_without_structure[j];
                     s.covered_without_structure[j] += static_cast<std::size_t>(r.covered[j]);
@@ -749,11 +767,12 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
     };
     Table summary("detection per kind of case", with_design({"cases", "drives", "correct", "correct or below the printed limit", "any false positive", "any missed", "said \"not in the library\"",
                                                  "95 % intervals holding the truth when correct: Rs, Ld, Lq, psi_f",
-                                                 "the same where no structure is left"}));
+                                                 "the same where no structure is left",
+                                                 "the same of the intervals not marked (not valid, or a stated bias)"}));
     auto group_on = [&](const std::string& design, const std::string& title, const std::function<bool(const StudyCase&)>& kind_of) {
         const auto in = [&](const StudyCase& c) { return c.design == design && kind_of(c); };
         std::size_t n = 0, k = 0, fp = 0, miss = 0, nil = 0, right = 0;
-        std::array<std::size_t, 4> covered{}, intervals{}, covered_clean{}, intervals_clean{};
+        std::array<std::size_t, 4> covered{}, intervals{}, covered_clean{}, intervals_clean{}, covered_unmarked{}, intervals_unmarked{};
         for (std::size_t c = 0; c < run.cases.size(); ++c) {
             if (!in(run.cases[c])) continue;
             n += s[c].runs;
@@ -767,11 +786,13 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                 intervals[j] += s[c].intervals[j];
                 covered_clean[j] += s[c].covered_without_structure[j];
                 intervals_clean[j] += s[c].intervals_without_structure[j];
+                covered_unmarked[j] += s[c].covered_unmarked[j];
+                intervals_unmarked[j] += s[c].intervals_unmarked[j];
             }
         }
         if (n > 0)
             summary.add_row(design_cell({title, std::to_string(n), rate(k, n), rate(right, n), rate(fp, n), rate(miss, n), rate(nil, n), coverage_text(covered, intervals),
-                                         coverage_text(covered_clean, intervals_clean)},
+                                         coverage_text(covered_clean, intervals_clean), coverage_counts_text(covered_unmarked, intervals_unmarked)},
                                         design));
     };
     std::vector<std::string> design_names;
@@ -868,7 +889,8 @@ std::string study_csv(const StudyRun& run) {
     const bool designs = std::any_of(run.cases.begin(), run.cases.end(), [](const StudyCase& c) { return !c.design.empty(); });
     std::vector<Column> columns{"case", "kind", "magnitude", "drives", "correct", "rate", "rate_low95", "rate_high95", "right_for_log", "false_positives_per_drive", "any_missed",
                  "not_in_library", "ties", "median_abs_error_rs", "median_abs_error_ld", "median_abs_error_lq", "median_abs_error_psi_f",
-                 "coverage_rs", "coverage_ld", "coverage_lq", "coverage_psi_f", "coverage_drives", "mean_seconds"};
+                 "coverage_rs", "coverage_ld", "coverage_lq", "coverage_psi_f", "coverage_drives",
+                 "unmarked_coverage_rs", "unmarked_coverage_ld", "unmarked_coverage_lq", "unmarked_coverage_psi_f", "mean_seconds"};
     if (designs) columns.insert(columns.begin(), Column("design"));
     // Always there (empty where the plant's flux is linear), so that a subset of a study has the columns of the whole.
     columns.insert(columns.end() - 1, Column("median_flux_error"));
@@ -883,12 +905,16 @@ std::string study_csv(const StudyRun& run) {
         auto coverage = [&](std::size_t j) {
             return x.intervals[j] ? g6(static_cast<double>(x.covered[j]) / static_cast<double>(x.intervals[j])) : std::string();
         };
+        auto unmarked = [&](std::size_t j) {
+            return x.intervals_unmarked[j] ? g6(static_cast<double>(x.covered_unmarked[j]) / static_cast<double>(x.intervals_unmarked[j])) : std::string();
+        };
         std::vector<Cell> row{run.cases[c].label, run.cases[c].kind, run.cases[c].magnitude, std::to_string(x.runs), std::to_string(x.correct),
                        g6(static_cast<double>(x.correct) / static_cast<double>(std::max<std::size_t>(x.runs, 1))), g6(lo), g6(hi),
                        std::to_string(x.right_for_log), g6(x.false_positives), std::to_string(x.any_missed), std::to_string(x.not_in_library), std::to_string(x.ties),
                        g6(x.median_error[0]), g6(x.median_error[1]), g6(x.median_error[2]), g6(x.median_error[3]),
                        coverage(0), coverage(1), coverage(2), coverage(3),
                        std::to_string(*std::max_element(x.intervals.begin(), x.intervals.end())),
+                       unmarked(0), unmarked(1), unmarked(2), unmarked(3),
                        fmt::format("{:.4g}", x.seconds / static_cast<double>(std::max<std::size_t>(x.runs, 1)))};
         if (designs) row.insert(row.begin(), Cell(run.cases[c].design));
         row.insert(row.end() - 1, Cell(std::isfinite(x.median_flux_error) ? g6(x.median_flux_error) : std::string()));
@@ -925,6 +951,7 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"tie", r.tie},
             {"incomplete", r.incomplete},
             {"intervals_valid", r.intervals_valid},
+            {"interval_marked", {{"Rs", r.interval_marked[0]}, {"Ld", r.interval_marked[1]}, {"Lq", r.interval_marked[2]}, {"psi_f", r.interval_marked[3]}}},
             {"missed_detection_limits", missed_limits},
             {"below_detection_limit", r.below_limit},
             {"base_error", {{"Rs", r.base_error[0]}, {"Ld", r.base_error[1]}, {"Lq", r.base_error[2]}, {"psi_f", r.base_error[3]}}},

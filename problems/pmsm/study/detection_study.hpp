@@ -128,6 +128,9 @@ struct StudyRecord {
     bool tie = false;
     bool incomplete = false;            // recommended, and "something else is missing" said
     bool intervals_valid = true;        // the diagnosis did not mark the recommended model's intervals not valid
+    // Per base parameter (Rs, Ld, Lq, psi_f): its interval came with a mark, not valid or a caveat
+    // that concerns it (Diagnosis::recommended_interval_marked).
+    std::array<bool, 4> interval_marked{};
     std::vector<int> mechanical_orders; // harmonics at mechanical orders the findings named (left beyond chance)
     std::vector<std::string> false_positives, missed;
     std::vector<DetectionLimit> missed_limits;  // the detection limits the diagnosis printed for the missed effects
