@@ -29,6 +29,9 @@ public:
     // Model side: the term it adds to the predicted voltages, on all samples at once.
     unsigned model_stages() const override { return static_cast<unsigned>(mhb::pmsm::ModelStage::MachineVoltage); }
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
+    // Both harmonics turn at 12 theta in the rotor frame: a diagnosis can then tell a 12th harmonic
+    // this law takes from one it cannot make.
+    std::vector<int> angle_orders() const override { return {12}; }
     void model(mhb::pmsm::ModelStage, const double* p, mhb::pmsm::ModelState& s) const override {
         for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
             const Complex e = s.omega[k] * ripple_emf(p, s.theta[k], s.psi_f[k]);

@@ -4,6 +4,7 @@
 #include "problems/pmsm/diagnosis/diagnosis_stages.hpp"
 #include "problems/pmsm/diagnosis/findings.hpp"
 #include "problems/pmsm/diagnosis/interval_caveats.hpp"
+#include "problems/pmsm/diagnosis/library_orders.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
 
 namespace mhb::pmsm {
@@ -44,6 +45,16 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     score_candidates(out.candidates, data, design, proposals, baseline.model, out.noise, check.folds);
     PathTrace trace = trace_path(data, search, baseline.model, check.lack_of_fit, out.noise, options.floor_tolerance, shaft);
     Recommendation r = recommend(spec, search, trace, check.lack_of_fit, design, proposals);
+    // A harmonic that no law of the library makes, at any size, is missing physics however small
+    // against the floor's tolerance, which only excuses the laws' own errors (docs/diagnosis.md, section 3).
+    {
+        const std::size_t judged = r.missing_effect_found && r.tie.empty() ? r.step : 0;
+        out.outside_harmonics = harmonics_outside_library(trace.left[judged], trace.path[judged].fit.spec, out.noise);
+        if (!out.outside_harmonics.empty() && r.tie.empty()) {
+            if (r.missing_effect_found) r.incomplete = true;
+            else r.not_in_library = true;
+        }
+    }
 
     out.model = std::move(baseline.model);
     out.build_up = std::move(baseline.build_up);

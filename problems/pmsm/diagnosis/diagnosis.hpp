@@ -175,6 +175,7 @@ struct Harmonic {
     Eigen::Vector2d amplitude{0.0, 0.0};            // V, d and q
     double standard_error = 0.0;                    // V, of each amplitude component under noise alone
     double p_value = 1.0;
+    bool significant = false;                       // beyond chance after Bonferroni over every harmonic tested
 };
 
 // A harmonic of the shaft's mechanical angle at an order that is not an electrical one: something
@@ -264,6 +265,10 @@ struct Diagnosis {
     std::vector<std::string> tie;        // effects the evidence cannot order (at the step where the search stopped)
     std::vector<Experiment> tie_experiments;
     bool not_in_library = false;
+    // Significant, relevant harmonics of the electrical angle that the recommended model leaves at
+    // orders no library law makes (library_orders.hpp): they make the verdict "not in the library",
+    // or "something else is missing", even below the floor's tolerance.
+    std::vector<Harmonic> outside_harmonics;
     // The recommended set explains most of the excess residual but not all: something else is
     // missing too, of the signature its residual shows (path.back().signature).
     bool incomplete = false;

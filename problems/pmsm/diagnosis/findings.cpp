@@ -61,6 +61,15 @@ const Candidate* candidate_of(const Diagnosis& d, const std::string& effect) {
     return found;
 }
 
+// "harmonic 2 of the electrical angle (110 mV on u_d, 422 mV on u_q, noise 31 mV)", and so on.
+std::string outside_harmonics_text(const Diagnosis& d) {
+    std::vector<std::string> parts;
+    for (const auto& h : d.outside_harmonics)
+        parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)", h.order,
+                                    1e3 * h.amplitude[0], 1e3 * h.amplitude[1], 1e3 * h.standard_error));
+    return join(parts);
+}
+
 // The model's residual against the noise, and what the design can determine at all.
 void model_findings(const Diagnosis& d, std::vector<std::string>& f) {
     const auto& m = d.model;
@@ -140,7 +149,12 @@ void found_findings(const Diagnosis& d, double floor_tolerance, std::vector<std:
         if (!d.path[k].reduced_law.empty())
             f.push_back("Only the terms of its law this log pins: " + d.path[k].reduced_law +
                         ". More operating points (other currents and speeds) would show whether the other terms are there.");
-    if (d.incomplete)
+    if (d.incomplete && last.at_noise_floor && !d.outside_harmonics.empty())
+        f.push_back(fmt::format("Something else is missing too: what {} leaves is within the noise floor's tolerance, but it holds {}, an order "
+                                "that no library law makes at any size. Model incomplete: its intervals are not valid (they take that structure "
+                                "for noise), and its values hold only as far as the structure does not bias them.",
+                                last.fit.spec.text(), outside_harmonics_text(d)));
+    else if (d.incomplete)
         f.push_back(fmt::format("Something else is missing too: {} explains {:.0f} % of the excess residual, and what it leaves is above the "
                                 "noise floor of {:.3g} V ({}). No library effect added to it explains that. Model incomplete: its intervals "
                                 "are not valid (they take that structure for noise), and its values hold only as far as the structure does not bias them.",
@@ -175,7 +189,12 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double 
         f.push_back(d.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
                                               : "An experiment that would separate them: " + experiment_list(d.tie_experiments) + ".");
     } else if (d.not_in_library) {
-        std::string text = "No set of library effects reaches the noise floor with plausible values: the missing effect is not in the library.";
+        std::string text = d.path.front().at_noise_floor && !d.outside_harmonics.empty()
+                               ? fmt::format("What {} leaves is within the noise floor's tolerance, but it holds {}, an order that no library "
+                                             "law makes at any size: the missing effect is not in the library.",
+                                             d.model.spec.text(), outside_harmonics_text(d))
+                               : std::string("No set of library effects reaches the noise floor with plausible values: the missing effect is "
+                                             "not in the library.");
         if (d.path.size() > 1)
             text += fmt::format(" The best set the library offers, {}, explains {:.0f} % of the excess residual{}; its effects may be real or may "
                                 "absorb part of the unknown one, so it is not recommended.",

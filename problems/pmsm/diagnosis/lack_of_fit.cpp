@@ -467,8 +467,9 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
     const double tests = 2.0 * static_cast<double>((data.theta_e ? orders : 0) + static_cast<int>(mechanical.harmonics.size()));
     if (data.theta_e) {
         l.harmonics = angle_harmonics(data, residual, noise);
-        for (const auto& harmonic : l.harmonics)
+        for (auto& harmonic : l.harmonics)
             if (harmonic.p_value < significance / tests) {
+                harmonic.significant = true;
                 significant = true;
                 structure_energy += 0.5 * static_cast<double>(n) * harmonic.amplitude.squaredNorm();
                 parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)",

@@ -31,6 +31,7 @@ public:
     // omega L J o: proportional to L_d and L_q.
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool is_size(std::size_t) const override { return true; }
+    std::vector<int> angle_orders() const override { return {1}; }  // a stator-frame offset turns once per period in the rotor frame
     // A sensor's offset is a fraction of its full scale, and a drive's sensors are sized to its
     // currents: up to 1 % of a full scale about twice the largest current logged (Hall sensors before
     // calibration; the 5 kW and 100 kW profiles log up to 0.54 and 0.6 of theirs). The declared

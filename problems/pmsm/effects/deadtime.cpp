@@ -53,6 +53,13 @@ public:
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     bool model_linear_in(std::size_t k) const override { return k == 0; }  // the voltage, not the band
+    // The loss follows each phase current's sign: a six-step wave in the stator frame, whose
+    // harmonics in the rotor frame are the multiples of 6.
+    std::vector<int> angle_orders() const override {
+        std::vector<int> out;
+        for (int k = 6; k <= 60; k += 6) out.push_back(k);
+        return out;
+    }
 
     // A band over a large part of the logged current makes the loss proportional to the current: a
     // resistance, which R_s already is. The band's physical causes (ripple, snubber charge) are a

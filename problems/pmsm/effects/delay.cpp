@@ -20,6 +20,7 @@ public:
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Delay); }
     bool is_size(std::size_t) const override { return true; }
+    std::vector<int> angle_orders() const override { return {}; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         // The affine split runs this stage in each of its five lanes at the same angles.

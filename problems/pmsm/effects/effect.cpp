@@ -35,4 +35,11 @@ std::unique_ptr<Effect> make_effect(const std::string& name, const std::map<std:
     return entry.create(ParameterSet(entry.parameters, values));
 }
 
+std::vector<int> Effect::every_angle_order() {
+    // Beyond any order a lack-of-fit test asks about (diagnosis/lack_of_fit.hpp).
+    std::vector<int> out(64);
+    for (int k = 0; k < 64; ++k) out[static_cast<std::size_t>(k)] = k + 1;
+    return out;
+}
+
 }  // namespace mhb::pmsm

@@ -194,6 +194,14 @@ public:
     // the log's operating points cannot pin as a whole is offered to the search with fewer of them
     // (docs/diagnosis.md, section 1). Empty: the law is one term.
     virtual std::vector<std::vector<std::size_t>> law_terms() const { return {}; }
+    // The harmonics of the electrical angle (orders 1, 2, ... in the rotor frame) that the law puts
+    // in the modelled voltage, and so where its own error on a rippling current lies: dead time's
+    // six-step loss 6, 12, ...; an offset of a phase current's sensor 1. Empty: none (the law does
+    // not depend on the angle). A harmonic left in a residual at an order that no law of the library
+    // makes is physics outside it (docs/diagnosis.md, section 3). The default, every order, claims
+    // them all: a law that does not say cannot be told from one that makes any harmonic.
+    virtual std::vector<int> angle_orders() const { return every_angle_order(); }
+    static std::vector<int> every_angle_order();
     // Why the whole model is physically impossible with these effect parameters p and base parameters
     // base (Rs, Ld, Lq, psi_f) at the rotor-frame currents (i_d, i_q) of the log; empty when possible.
     virtual std::string implausible_reason(const double* /*p*/, const double* /*base*/, const Eigen::ArrayXd& /*i_d*/,

@@ -23,6 +23,7 @@ public:
 
     unsigned model_stages() const override { return ModelStage::SensorAngle | ModelStage::ControllerFrame; }
     bool is_size(std::size_t) const override { return true; }
+    std::vector<int> angle_orders() const override { return {}; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     void model(ModelStage stage, const double* p, ModelState& s) const override {
         if (stage == ModelStage::SensorAngle) {

@@ -47,6 +47,7 @@ public:
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::MachineVoltage); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool model_linear_in(std::size_t k) const override { return k == 0 || k == 2; }  // the amplitudes, not the phases
+    std::vector<int> angle_orders() const override { return {6}; }  // the 5th and 7th both turn at 6 theta in the rotor frame
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         const EmfPhasors emf(p);

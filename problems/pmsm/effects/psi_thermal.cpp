@@ -16,6 +16,7 @@ public:
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Coefficients); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool model_linear_in(std::size_t) const override { return true; }
+    std::vector<int> angle_orders() const override { return {}; }
     std::vector<std::string> model_columns() const override { return {"temp_magnet"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         s.psi_f *= 1.0 + p[0] * (s.temp_magnet - reference_temperature);

@@ -66,6 +66,7 @@ public:
     // Fitted directly to the Baldor machine's measured map over i_d from -12 to 0 A and |i_q| up to
     // 24 A, the law leaves 1.9 % of the flux linkage rms (docs/effects.md, "The Baldor study").
     double law_accuracy() const override { return 0.02; }
+    std::vector<int> angle_orders() const override { return {}; }  // the fluxes follow the rotor-frame currents alone
 
     bool range_end_implausible(std::size_t k) const override { return k != 1 && k != 3; }
     std::string range_end_meaning(std::size_t k, bool upper) const override {

@@ -14,6 +14,7 @@ public:
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::LoggedVoltage); }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     bool model_linear_in(std::size_t) const override { return true; }
+    std::vector<int> angle_orders() const override { return {}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
         s.u_d += p[0];
         s.u_q += p[1];

@@ -15,14 +15,17 @@ json experiments_json(const std::vector<Experiment>& experiments) {
     return out;
 }
 
+json harmonic_json(const Harmonic& x) {
+    return {{"order", x.order}, {"amplitude", {{"u_d", x.amplitude[0]}, {"u_q", x.amplitude[1]}}}, {"standard_error", x.standard_error},
+            {"p_value", x.p_value}};
+}
+
 json lack_of_fit_json(const LackOfFit& l) {
     json out{{"significant", l.significant}, {"signature", l.signature}};
     if (l.means_available) out["segment_means"] = {{"statistic", l.statistic}, {"dof", l.dof}, {"p_value", l.p_value}};
     else out["segment_means"] = nullptr;
     json h = json::array();
-    for (const auto& x : l.harmonics)
-        h.push_back({{"order", x.order}, {"amplitude", {{"u_d", x.amplitude[0]}, {"u_q", x.amplitude[1]}}}, {"standard_error", x.standard_error},
-                     {"p_value", x.p_value}});
+    for (const auto& x : l.harmonics) h.push_back(harmonic_json(x));
     out["harmonics"] = h;
     if (!l.mechanical_angle.empty()) {
         out["mechanical_angle"] = l.mechanical_angle;
@@ -56,6 +59,9 @@ json diagnosis_json(const Diagnosis& d) {
     out["tie"] = d.tie;
     out["tie_experiments"] = experiments_json(d.tie_experiments);
     out["not_in_library"] = d.not_in_library;
+    json outside = json::array();
+    for (const auto& x : d.outside_harmonics) outside.push_back(harmonic_json(x));
+    out["outside_harmonics"] = outside;
     out["incomplete"] = d.incomplete;
     out["recommended_model"] = d.recommended.text();
     out["intervals_valid"] = d.model_intervals_valid();
