@@ -65,8 +65,12 @@ const Candidate* candidate_of(const Diagnosis& d, const std::string& effect) {
 std::string outside_harmonics_text(const Diagnosis& d) {
     std::vector<std::string> parts;
     for (const auto& h : d.outside_harmonics)
-        parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)", h.order,
-                                    1e3 * h.amplitude[0], 1e3 * h.amplitude[1], 1e3 * h.standard_error));
+        parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV{})", h.order,
+                                    1e3 * h.amplitude[0], 1e3 * h.amplitude[1], 1e3 * h.standard_error,
+                                    // In the rotor frame a stator-frame negative sequence at the fundamental turns at 2 theta.
+                                    h.order == 2 ? "; a negative-sequence fundamental: phase current sensors of unequal gain, or phases of "
+                                                   "unequal impedance"
+                                                 : ""));
     return join(parts);
 }
 
