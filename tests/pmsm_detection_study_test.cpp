@@ -141,6 +141,10 @@ TEST_CASE("a bad study file is refused naming the file, line and field", "[pmsm]
             "effect[0].weak_size.deadtime.voltage: expects a finite number");
     refused(study_text(profile_path(), "[[effect]]\nname = \"delay\"\nclear = {}\nweak_size = { \"delay.tau\" = 1e-5 }\n"),
             "effect[0].weak_size: there is no near-limit case");
+    refused(study_text(profile_path(), "[[effect]]\nname = \"saturation\"\nclear = {}\npseudo_true_size = 1\n"),
+            "bad.toml:9: effect[0].pseudo_true_size: expects true or false");
+    refused(study_text(profile_path(), "[[effect]]\nname = \"saturation\"\nclear = {}\nclear_size = { \"saturation.cross\" = 0.1 }\npseudo_true_size = true\n"),
+            "effect[0].pseudo_true_size: the sizes are either stated (clear_size, weak_size) or fitted");
     refused(study_text(profile_path(), deadtime + "[[effect]]\nname = \"deadtime\"\nclear = {}\n"), "effect[1].name: 'deadtime' is listed twice (a `label`");
     refused(study_text(profile_path(), deadtime + "[[effect]]\nname = \"deadtime\"\nlabel = \"dead time\"\nclear = {}\n"),
             "effect[1].label: expects a non-empty name without");
@@ -272,6 +276,48 @@ TEST_CASE("a study on a saturating plant records how far the recommended flux mo
     REQUIRE(clean.records.size() == 1);
     CHECK(std::isnan(clean.records.front().flux_error));
     CHECK_FALSE(study_record_json(clean, clean.records.front()).contains("flux_error"));
+}
+
+TEST_CASE("a law the plant does not share is sized by fitting it to the drive without noise, and a miss below what that shows is below the limit",
+          "[pmsm][study]") {
+    // The servo study's saturating iron (its own law, not the library's) at its two sizes, one seed each.
+    auto spec = read_study(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "detection_study.toml");
+    spec.only = "saturation";
+    spec.seeds = {1};
+    const StudyRun run = run_study(spec, study_cases(spec), DiagnosisOptions{});
+    REQUIRE(run.records.size() == 2);
+    for (const auto& r : run.records) {
+        const StudyCase& c = run.cases[r.case_index];
+        INFO(c.magnitude << ": " << r.recommended);
+        REQUIRE(c.pseudo_true_sized == std::vector<std::string>{"saturation"});
+        // Every size parameter of the law, none of its shapes (knee, exponent).
+        CHECK(r.pseudo_true_size.size() == 4);
+        CHECK(r.pseudo_true_size.count("saturation.cross") == 1);
+        CHECK(r.pseudo_true_size.count("saturation.q_knee") == 0);
+        CHECK(r.pseudo_true_evidence > 0.0);
+        CHECK(r.pseudo_true_voltage > 0.0);
+        const auto json = study_record_json(run, r);
+        CHECK(json.contains("pseudo_true_size"));
+        CHECK(json.contains("pseudo_true_shows"));
+    }
+    const StudyRecord& clear = run.records[0];
+    const StudyRecord& weak = run.records[1];
+    REQUIRE(run.cases[clear.case_index].magnitude == "clear");
+    // The iron that saturates at 0.3 A shows more than twice what the search needs; at 0.6 A, less than half.
+    CHECK(clear.pseudo_true_evidence > 2.0 * clear.pseudo_true_needed);
+    CHECK(weak.pseudo_true_evidence < 0.5 * weak.pseudo_true_needed);
+    CHECK(weak.pseudo_true_evidence < clear.pseudo_true_evidence);
+    CHECK_FALSE(clear.pseudo_true_below());
+    CHECK(weak.pseudo_true_below());
+    // A miss of the weak one is a miss below this log's limit, and the answer right for this log.
+    if (!weak.correct) {
+        CHECK(weak.below_limit == std::vector<std::string>{"saturation"});
+        CHECK(weak.right_for_this_log());
+    }
+    // Cases without the key fit nothing.
+    auto plain = read_study(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "detection_study.toml");
+    for (const auto& c : study_cases(plain))
+        if (c.label != "saturation") CHECK(c.pseudo_true_sized.empty());
 }
 
 TEST_CASE("a drive whose simulation fails stops the study with its case and seed named, also on two threads", "[pmsm][study]") {

@@ -7,6 +7,7 @@
 #include <exception>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -18,6 +19,7 @@
 #include "framework/report_document.hpp"
 #include "problems/pmsm/data/operating_points.hpp"
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
+#include "problems/pmsm/diagnosis/verdict.hpp"
 #include "problems/pmsm/machine/flux_models.hpp"
 #include "problems/pmsm/model/steady_state_model.hpp"
 #include "problems/pmsm/simulation/drive_simulator.hpp"
@@ -225,7 +227,7 @@ StudySpec read_study(const std::filesystem::path& path) {
     }
 
     std::set<std::string> names;
-    each_table(file, root, "effect", {"name", "label", "clear", "weak", "in_pairs", "clear_size", "weak_size"}, [&](const std::string& field, const toml::table& t) {
+    each_table(file, root, "effect", {"name", "label", "clear", "weak", "in_pairs", "clear_size", "weak_size", "pseudo_true_size"}, [&](const std::string& field, const toml::table& t) {
         StudyEffect e;
         e.line = line_of(t);
         const toml::node& name = required(file, t, "name", field);
@@ -259,6 +261,13 @@ StudySpec read_study(const std::filesystem::path& path) {
         e.weak_size = stated_sizes(file, t, "weak_size", field, e.name);
         if (!e.weak_size.empty() && e.weak.empty())
             throw InputError(file, line_of(*t.get("weak_size")), field + ".weak_size", "there is no near-limit case (no `weak` settings) to state it for");
+        if (const auto* fitted = t.get("pseudo_true_size")) {
+            if (!fitted->is_boolean()) throw InputError(file, line_of(*fitted), field + ".pseudo_true_size", "expects true or false");
+            e.pseudo_true_size = fitted->value<bool>().value();
+            if (e.pseudo_true_size && (!e.clear_size.empty() || !e.weak_size.empty()))
+                throw InputError(file, line_of(*fitted), field + ".pseudo_true_size",
+                                 "the sizes are either stated (clear_size, weak_size) or fitted to each drive without noise, not both");
+        }
         spec.effects.push_back(std::move(e));
     });
     each_table(file, root, "outside", {"name", "settings", "profile", "mechanical_order"}, [&](const std::string& field, const toml::table& t) {
@@ -387,9 +396,15 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
         return cases.emplace_back(std::move(c));
     };
     add_case("clean", "clean", "", {}, "", {});
-    for (const auto& e : spec.effects) add_case(e.label, "single", "clear", {e.name}, combine({{e.label, e.clear}}), {{e.name, e.clear_size}});
+    // An effect whose sizes each drive fits (pseudo_true_size) has none stated.
+    auto add_single = [&](const StudyEffect& e, const char* magnitude, const std::string& settings, const std::map<std::string, double>& size) {
+        StudyCase& c = add_case(e.label, "single", magnitude, {e.name}, combine({{e.label, settings}}), {});
+        if (e.pseudo_true_size) c.pseudo_true_sized = {e.name};
+        else c.sizes = {{e.name, size}};
+    };
+    for (const auto& e : spec.effects) add_single(e, "clear", e.clear, e.clear_size);
     for (const auto& e : spec.effects)
-        if (!e.weak.empty()) add_case(e.label, "single", "weak", {e.name}, combine({{e.label, e.weak}}), {{e.name, e.weak_size}});
+        if (!e.weak.empty()) add_single(e, "weak", e.weak, e.weak_size);
     std::vector<std::vector<std::string>> pairs = spec.pairs;
     if (spec.all_pairs)
         for (std::size_t a = 0; a < spec.effects.size(); ++a)
@@ -403,17 +418,18 @@ std::vector<StudyCase> study_cases(const StudySpec& spec) {
     auto add_combination = [&](const std::vector<std::string>& names, const char* kind) {
         std::vector<std::pair<std::string, std::string>> parts;
         std::map<std::string, std::map<std::string, double>> sizes;
-        std::vector<std::string> truth;
+        std::vector<std::string> truth, pseudo_true_sized;
         for (const auto& n : names) {
             const StudyEffect& e = *by_name[n];
             if (std::find(truth.begin(), truth.end(), e.name) != truth.end())
                 throw InputError(file, e.line, kind, fmt::format("{} names {} twice (labels {})", joined(names, "+"), e.name, joined(names, ", ")));
             parts.emplace_back(n, e.clear);
-            sizes[e.name] = e.clear_size;
+            if (e.pseudo_true_size) pseudo_true_sized.push_back(e.name);
+            else sizes[e.name] = e.clear_size;
             truth.push_back(e.name);
         }
         std::sort(truth.begin(), truth.end());
-        add_case(joined(names, "+"), kind, "clear", truth, combine(parts), sizes);
+        add_case(joined(names, "+"), kind, "clear", truth, combine(parts), sizes).pseudo_true_sized = std::move(pseudo_true_sized);
     };
     for (const auto& p : pairs) add_combination(p, "pair");
     for (const auto& t : spec.triples) add_combination(t, "triple");
@@ -477,6 +493,41 @@ double flux_error_of(const DriveSimulation& sim, const Measurement& data, const 
     return std::sqrt(error / size);
 }
 
+// The pseudo-true sizes of `effects` in `truth` (StudyRecord::pseudo_true_size): the law fitted to
+// the drive without sensor noise, and what it shows on this log in the noise the diagnosis measured.
+void fit_pseudo_true(const Measurement& quiet, const ModelSpec& truth, const std::vector<std::string>& effects, FitOptions options,
+                     const NoiseEstimate& noise, StudyRecord& r) {
+    options.intervals = false;
+    options.keep_residual = false;
+    const ModelFit fit = fit_model(quiet, truth, options);
+    ModelSpec rest = truth;
+    for (const auto& e : effects) rest = rest.without(e);
+    const ModelFit without = fit_model(quiet, rest, options);
+    const auto model = make_model(truth, quiet);
+    const auto free = free_parameters(truth);
+    // The model's parameters: the base's, then each effect's real ones (is_size counts those alone).
+    std::size_t j = base_parameter_names.size();
+    int added = 0;
+    for (const auto& effect : model->effects()) {
+        const bool wanted = std::find(effects.begin(), effects.end(), effect->name()) != effects.end();
+        std::size_t k = 0;
+        for (const auto& p : effect->parameter_specs()) {
+            if (p.type != ParameterType::Real) continue;
+            if (wanted && free[j]) ++added;
+            if (wanted && effect->is_size(k)) r.pseudo_true_size[model->parameter_names()[j]] = fit.values[static_cast<Eigen::Index>(j)];
+            ++k;
+            ++j;
+        }
+    }
+    // As detection_limits() states a limit: the likelihood ratio in each axis's long-run noise, the
+    // search's need for `added` parameters, the voltage against the noise's resolution.
+    const Eigen::Array2d gained = without.axis_rss.array() - fit.axis_rss.array();
+    r.pseudo_true_evidence = (gained / noise.long_run.array().square()).sum();
+    r.pseudo_true_needed = added * std::log(std::max(noise.effective_samples, 2.0)) - evidence::supported_bic;
+    r.pseudo_true_voltage = std::sqrt(std::max(gained.sum(), 0.0) / (2.0 * static_cast<double>(quiet.size())));
+    r.pseudo_true_relevant = evidence::relevant_voltage * std::sqrt(noise.sigma.squaredNorm() / 2.0);
+}
+
 }  // namespace
 
 StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const DiagnosisOptions& options,
@@ -524,17 +575,23 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             write_simulation(spec.keep_data / fmt::format("{}_seed{}.csv", name, r.seed), sim, result, source);
         }
         result.data.source = source;
+        // The same drive without sensor noise (what the noise a diagnosis measures, and a law's
+        // pseudo-true values, are judged against).
+        auto quiet_data = [&] {
+            DriveSimulation quiet = parse_simulation_profile(case_profile(spec, c, r.seed), source, profile_of(c).parent_path());
+            quiet.noise = SensorNoise{};
+            return simulate(quiet).data;
+        };
+        std::optional<OperatingPoints> points;
         if (!result.data.has_segments()) {
             // A raw log: its operating points found as `diagnose` finds them, and the noise a
             // measurement from the data should find, from the same drive without noise.
-            const OperatingPoints points = find_operating_points(result.data);
-            r.windows = points.windows.size();
-            DriveSimulation quiet = parse_simulation_profile(case_profile(spec, c, r.seed), source, profile_of(c).parent_path());
-            quiet.noise = SensorNoise{};
+            points = find_operating_points(result.data);
+            r.windows = points->windows.size();
             std::vector<std::pair<Eigen::Index, Eigen::Index>> rows;
-            for (const auto& w : points.windows) rows.emplace_back(w.first, w.rows);
-            r.noise_simulated = sensor_noise_in_residual(sim.motor, result.data, simulate(quiet).data, rows);
-            result.data = select_operating_points(std::move(result.data), points);
+            for (const auto& w : points->windows) rows.emplace_back(w.first, w.rows);
+            r.noise_simulated = sensor_noise_in_residual(sim.motor, result.data, quiet_data(), rows);
+            result.data = select_operating_points(std::move(result.data), *points);
         }
         // Whoever logs a drive knows its pole pairs: the diagnosis tests the mechanical orders with them.
         DiagnosisOptions drive_options = options;
@@ -553,7 +610,19 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         for (std::size_t j = 0; j < 4; ++j) r.interval_marked[j] = d.recommended_interval_marked(j);
         for (const auto& l : d.detection_limits)
             if (std::find(r.missed.begin(), r.missed.end(), l.effect) != r.missed.end()) r.missed_limits.push_back(l);
+        if (!c.pseudo_true_sized.empty()) {
+            Measurement quiet = quiet_data();
+            if (points) quiet = select_operating_points(std::move(quiet), *points);
+            ModelSpec truth = model;
+            for (const auto& e : c.truth)
+                if (!truth.contains(e)) truth = truth.with(e);
+            fit_pseudo_true(quiet, truth, c.pseudo_true_sized, options.fit, d.noise, r);
+        }
         for (const auto& effect : r.missed) {
+            if (std::find(c.pseudo_true_sized.begin(), c.pseudo_true_sized.end(), effect) != c.pseudo_true_sized.end()) {
+                if (r.pseudo_true_below()) r.below_limit.push_back(effect);
+                continue;
+            }
             const auto stated = c.sizes.find(effect);
             if (stated == c.sizes.end() || stated->second.empty()) continue;
             bool below = true;
@@ -754,6 +823,18 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                   "below the printed limit\": also counting a drive that added nothing false, did not say \"not in the library\" and missed only effects whose true size, as the "
                                   "study file states it (`clear_size`, `weak_size`), lies below the detection limit the diagnosis printed for them.",
                                   spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size())});
+    // Only where a case fits its sizes, so that the other studies' tables stay as they were.
+    std::vector<std::string> fitted;
+    for (const auto& e : spec.effects)
+        if (e.pseudo_true_size) fitted.push_back(e.label);
+    if (!fitted.empty())
+        doc.add(Paragraph{fmt::format("The plant's law of {} is not the library's, so no setting states its size in the law's parameters "
+                                      "(`pseudo_true_size`): each drive fits the law to the same drive without noise, and a miss counts as below "
+                                      "the limit when that law, on this log and in the noise the diagnosis measured, gains a likelihood ratio short of "
+                                      "what the search needs for its parameters, or changes the voltage by less than the relevant amount (the two "
+                                      "thresholds of each printed limit; records: `pseudo_true_size`, `pseudo_true_shows`). Its terms trade against "
+                                      "each other, so one of them may exceed its printed limit while the whole law shows less.",
+                                      joined(fitted, ", "))});
     doc.add(Heading{2, "Summary"});
     const bool designs = !spec.designs.empty();
     // With designs every row names its design first.
@@ -962,6 +1043,12 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"noise", r.noise}});
     // Only when some were named, so that the records of drives without a whole turn stay as they were.
     if (!r.mechanical_orders.empty()) out["mechanical_orders"] = r.mechanical_orders;
+    // Only for the cases that fit them (StudyCase::pseudo_true_sized).
+    if (!r.pseudo_true_size.empty()) {
+        out["pseudo_true_size"] = r.pseudo_true_size;
+        out["pseudo_true_shows"] = {{"likelihood_ratio", r.pseudo_true_evidence}, {"needed", r.pseudo_true_needed},
+                                    {"voltage", r.pseudo_true_voltage}, {"relevant_voltage", r.pseudo_true_relevant}};
+    }
     // Only where the plant's flux is not linear (StudyRecord::flux_error).
     if (std::isfinite(r.flux_error)) out["flux_error"] = r.flux_error;
     // Only for a raw log (StudyRecord::windows).

@@ -40,6 +40,11 @@ struct StudyEffect {
     // study's author knows it from the plant's settings; empty: not stated. A missed effect whose every
     // stated size lies below the detection limit the diagnosis printed for it was "below the limit".
     std::map<std::string, double> clear_size, weak_size;
+    // For a plant whose law the library's only approximates (saturating iron, a measured flux map),
+    // no setting states the size in the model's parameters: `pseudo_true_size = true` takes it from
+    // the library law fitted to the same drive without sensor noise (its pseudo-true values), drive
+    // by drive. Exclusive with clear_size and weak_size.
+    bool pseudo_true_size = false;
 };
 
 struct StudyOutside {
@@ -106,6 +111,7 @@ struct StudyCase {
     bool outside = false;               // an effect the library lacks is present
     std::string settings;               // merged settings, TOML text
     std::map<std::string, std::map<std::string, double>> sizes;  // per effect present, its stated true sizes
+    std::vector<std::string> pseudo_true_sized;  // effects present whose sizes each drive fits (StudyEffect::pseudo_true_size)
     std::string design;                 // the [[design]] it runs on (empty: the profile as it is)
     std::string design_settings;        // its settings, TOML text, merged into the profile before `settings`
     std::filesystem::path profile;      // the case's own profile (empty: the study's)
@@ -136,6 +142,16 @@ struct StudyRecord {
     std::vector<DetectionLimit> missed_limits;  // the detection limits the diagnosis printed for the missed effects
     // Missed effects whose every stated size is below the limit printed for it: the log could not show them.
     std::vector<std::string> below_limit;
+    // The case's pseudo-true-sized effects (StudyCase::pseudo_true_sized) on this drive without noise:
+    // their size parameters fitted there (parameter -> value), and, since those trade against each
+    // other, what the whole law shows on this log: the likelihood ratio it gains over the model
+    // without it, in the noise the diagnosis measured, against what the search needs for that many
+    // parameters, and the rms voltage it changes against the relevant voltage (detection_limits.hpp
+    // states the same two thresholds per parameter). Below either, the effect is below this log's limit.
+    std::map<std::string, double> pseudo_true_size;
+    double pseudo_true_evidence = std::nan(""), pseudo_true_needed = std::nan("");
+    double pseudo_true_voltage = std::nan(""), pseudo_true_relevant = std::nan("");  // V
+    bool pseudo_true_below() const { return pseudo_true_evidence < pseudo_true_needed || pseudo_true_voltage < pseudo_true_relevant; }
     // Every effect missed is below its limit, nothing false was added and no "not in the library" was
     // said (structure left means something above the noise): the answer is right for this log.
     bool right_for_this_log() const {
