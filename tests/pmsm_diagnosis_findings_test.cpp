@@ -179,7 +179,8 @@ TEST_CASE("a tie, the missing effect outside the library, a hidden effect and a 
 
     Diagnosis unknown = diagnosis_of_base();
     unknown.lack_of_fit.significant = true;
-    unknown.lack_of_fit.signature = "segment means of the u_q residual up to 30 mV";
+    unknown.lack_of_fit.signature_parts = {{0, "segment means of the u_q residual up to 30 mV"}};
+    unknown.lack_of_fit.signature = unknown.lack_of_fit.signature_without({});
     unknown.not_in_library = true;
     Candidate hidden;
     hidden.effect = "delay";
@@ -192,6 +193,37 @@ TEST_CASE("a tie, the missing effect outside the library, a hidden effect and a 
     CHECK(says(f, "Not identifiable from this data (absorbed by the model's parameters without trace): delay."));
     CHECK(says(f, "delay: none of the extra operating points tried, alone or together, would make a tenth of its signature its own."));
     CHECK(f.back() == "The apparent Rs drifts with temp_winding across segments (r = 0.95, 0.18 Ohm per K).");
+}
+
+TEST_CASE("a harmonic outside the library that a model at the floor leaves is named once, and the rest of the signature after it",
+          "[pmsm][diagnosis][findings]") {
+    Diagnosis d = diagnosis_of_base();
+    d.path.front().at_noise_floor = true;
+    d.not_in_library = true;
+    Harmonic second;
+    second.order = 2;
+    second.amplitude = {0.11, 0.422};
+    second.standard_error = 0.031;
+    second.significant = true;
+    d.outside_harmonics = {second};
+    d.lack_of_fit.significant = true;
+    d.lack_of_fit.signature_parts = {{0, "segment means of the u_q residual up to 231 mV"},
+                                     {2, "harmonic 2 of the electrical angle (110 mV on u_d, 422 mV on u_q, noise 31 mV)"},
+                                     {5, "harmonic 5 of the electrical angle (1 mV on u_d, 90 mV on u_q, noise 31 mV)"}};
+    CHECK(d.lack_of_fit.signature_without({2}) ==
+          "segment means of the u_q residual up to 231 mV; harmonic 5 of the electrical angle (1 mV on u_d, 90 mV on u_q, noise 31 mV)");
+    CHECK(d.lack_of_fit.signature_without({2, 5}) == "segment means of the u_q residual up to 231 mV");
+    const auto f = findings_of(d, d.lack_of_fit, 0.25);
+    CHECK(says(f, "What base leaves is within the noise floor's tolerance, but it holds harmonic 2 of the electrical angle (110 mV on u_d, 422 mV "
+                  "on u_q, noise 31 mV; a negative-sequence fundamental: phase current sensors of unequal gain, or phases of unequal "
+                  "impedance), an order that no library law makes at any size: the missing effect is not in the library. Besides it: segment "
+                  "means of the u_q residual up to 231 mV; harmonic 5 of the electrical angle (1 mV on u_d, 90 mV on u_q, noise 31 mV)."));
+    // Named alone, with nothing besides it: no empty list.
+    d.lack_of_fit.signature_parts.erase(d.lack_of_fit.signature_parts.begin());
+    d.lack_of_fit.signature_parts.pop_back();
+    const auto alone = findings_of(d, d.lack_of_fit, 0.25);
+    CHECK(std::none_of(alone.begin(), alone.end(), [](const std::string& s) { return s.find("Besides it") != std::string::npos; }));
+    CHECK(std::any_of(alone.begin(), alone.end(), [](const std::string& s) { return s.ends_with("the missing effect is not in the library."); }));
 }
 
 TEST_CASE("a partial candidate's sentence agrees with the recommended path", "[pmsm][diagnosis][findings]") {

@@ -209,6 +209,10 @@ struct LackOfFit {
     bool significant = false;         // means or any harmonic beyond chance (p < 1e-3 after Bonferroni)
     double structure = 0.0;           // power of the significant structure (means, harmonics) relative to the noise's
     std::string signature;            // in words
+    // The same, part by part, each with the order of the electrical angle it names (0: the segment
+    // means, a mechanical order): a sentence that has named some harmonics lists the rest.
+    std::vector<std::pair<int, std::string>> signature_parts;
+    std::string signature_without(const std::vector<int>& orders) const;
 };
 
 struct ApparentValue {

@@ -193,7 +193,8 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double 
         f.push_back(d.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
                                               : "An experiment that would separate them: " + experiment_list(d.tie_experiments) + ".");
     } else if (d.not_in_library) {
-        std::string text = d.path.front().at_noise_floor && !d.outside_harmonics.empty()
+        const bool named = d.path.front().at_noise_floor && !d.outside_harmonics.empty();
+        std::string text = named
                                ? fmt::format("What {} leaves is within the noise floor's tolerance, but it holds {}, an order that no library "
                                              "law makes at any size: the missing effect is not in the library.",
                                              d.model.spec.text(), outside_harmonics_text(d))
@@ -204,8 +205,14 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double 
                                 "absorb part of the unknown one, so it is not recommended.",
                                 last.fit.spec.text(), 100.0 * last.explained,
                                 last.plausible ? std::string() : " but takes implausible values (" + last.implausible.front() + ")");
-        text += " The signature" + std::string(d.path.size() > 1 && remaining.significant ? " of what it leaves" : "") + ": " +
-                (remaining.significant ? remaining.signature : d.lack_of_fit.signature) + ".";
+        // The harmonics named above are not named again.
+        std::vector<int> orders;
+        if (named)
+            for (const auto& h : d.outside_harmonics) orders.push_back(h.order);
+        const std::string rest = (remaining.significant ? remaining : d.lack_of_fit).signature_without(orders);
+        if (!rest.empty())
+            text += std::string(named ? " Besides it" : " The signature") + (d.path.size() > 1 && remaining.significant ? " of what it leaves" : "") +
+                    ": " + rest + ".";
         f.push_back(text);
     } else if (!d.missing_effect_found) {
         const std::string none = d.unpredictive.empty()

@@ -455,9 +455,9 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
     bool significant = means_significant;
     // Structure counts once it is significant: the means when they are, each significant harmonic.
     double structure_energy = significant ? means_energy : 0.0;
-    std::vector<std::string> parts;
+    auto& parts = l.signature_parts;
     if (means_significant)
-        for (int a = 0; a < 2; ++a) parts.push_back(segment_means_signature(data, fit, a));
+        for (int a = 0; a < 2; ++a) parts.emplace_back(0, segment_means_signature(data, fit, a));
     MechanicalTest mechanical;
     if (!shaft.source.empty()) {
         mechanical = mechanical_harmonics(data, residual, noise, shaft);
@@ -472,9 +472,9 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
                 harmonic.significant = true;
                 significant = true;
                 structure_energy += 0.5 * static_cast<double>(n) * harmonic.amplitude.squaredNorm();
-                parts.push_back(fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)",
-                                            harmonic.order, 1e3 * harmonic.amplitude[0], 1e3 * harmonic.amplitude[1],
-                                            1e3 * harmonic.standard_error));
+                parts.emplace_back(harmonic.order, fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)",
+                                                               harmonic.order, 1e3 * harmonic.amplitude[0], 1e3 * harmonic.amplitude[1],
+                                                               1e3 * harmonic.standard_error));
             }
     }
     for (auto& h : mechanical.harmonics) {
@@ -482,7 +482,7 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
         if (!h.significant) continue;
         significant = true;
         structure_energy += 0.5 * static_cast<double>(h.rows) * h.amplitude.squaredNorm();
-        parts.push_back(fmt::format("harmonic at mechanical order {} ({}/{} of the electrical frequency; {:.3g} mV on u_d, {:.3g} mV on u_q, "
+        parts.emplace_back(0, fmt::format("harmonic at mechanical order {} ({}/{} of the electrical frequency; {:.3g} mV on u_d, {:.3g} mV on u_q, "
                                     "noise {:.2g} mV{})",
                                     h.order, h.order, h.pole_pairs, 1e3 * h.amplitude[0], 1e3 * h.amplitude[1], 1e3 * h.standard_error,
                                     h.phase ? fmt::format(", phase {:.2f} rad on u_{} against theta_m", (*h.phase)[h.amplitude[1] >= h.amplitude[0]],
@@ -493,8 +493,15 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
     l.significant = significant;
     const double noise_energy = static_cast<double>(n) * noise.sigma.squaredNorm();
     l.structure = noise_energy > 0.0 ? structure_energy / noise_energy : 0.0;
-    for (const auto& p : parts) l.signature += (l.signature.empty() ? "" : "; ") + p;
+    l.signature = l.signature_without({});
     return l;
+}
+
+std::string LackOfFit::signature_without(const std::vector<int>& orders) const {
+    std::string out;
+    for (const auto& [order, text] : signature_parts)
+        if (order == 0 || std::find(orders.begin(), orders.end(), order) == orders.end()) out += (out.empty() ? "" : "; ") + text;
+    return out;
 }
 
 }  // namespace mhb::pmsm
