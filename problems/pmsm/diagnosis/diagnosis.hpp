@@ -273,6 +273,11 @@ struct Diagnosis {
     // orders no library law makes (library_orders.hpp): they make the verdict "not in the library",
     // or "something else is missing", even below the floor's tolerance.
     std::vector<Harmonic> outside_harmonics;
+    // "Not in the library" said although the model diagnosed is at the noise floor: only its
+    // outside harmonics say it (the findings name them, the report points there).
+    bool not_in_library_by_harmonics() const {
+        return not_in_library && !path.empty() && path.front().at_noise_floor && !outside_harmonics.empty();
+    }
     // The recommended set explains most of the excess residual but not all: something else is
     // missing too, of the signature its residual shows (path.back().signature).
     bool incomplete = false;

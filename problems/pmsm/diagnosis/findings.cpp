@@ -193,7 +193,7 @@ void unresolved_findings(const Diagnosis& d, const LackOfFit& remaining, double 
         f.push_back(d.tie_experiments.empty() ? std::string("No single extra operating point separates them.")
                                               : "An experiment that would separate them: " + experiment_list(d.tie_experiments) + ".");
     } else if (d.not_in_library) {
-        const bool named = d.path.front().at_noise_floor && !d.outside_harmonics.empty();
+        const bool named = d.not_in_library_by_harmonics();
         std::string text = named
                                ? fmt::format("What {} leaves is within the noise floor's tolerance, but it holds {}, an order that no library "
                                              "law makes at any size: the missing effect is not in the library.",

@@ -86,7 +86,7 @@ void add_summary(Document& doc, const Diagnosis& d, const DiagnosisPlots& png, c
     doc.add(Paragraph{fmt::format("**Recommended model: `{}`**{}", d.recommended.text(),
                                   d.recommended.text() == m.spec.text()
                                       ? (!d.not_in_library ? " (no missing effect is recommended: see the findings)"
-                                         : d.path.front().at_noise_floor ? " (what it leaves is within the noise floor's tolerance, but holds a harmonic no library law makes: see the findings)"
+                                         : d.not_in_library_by_harmonics() ? " (what it leaves is within the noise floor's tolerance, but holds a harmonic no library law makes: see the findings)"
                                                                          : " (no set of library effects reaches the noise floor with plausible values)")
                                       : (d.incomplete ? " (and something else is missing: see the findings)" : ""))});
     add_image(doc, png.path, "residual after each step of the search");
