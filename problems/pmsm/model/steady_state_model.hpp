@@ -69,6 +69,9 @@ public:
     void leave_out(ModelStage stage) { stages_ &= ~static_cast<unsigned>(stage); }
     const std::vector<std::unique_ptr<Effect>>& effects() const { return effects_; }
     Eigen::Index parameter_count() const { return static_cast<Eigen::Index>(names_.size()); }
+    // Where effect e's real parameters start among the model's (they run to the next effect's start,
+    // or to parameter_count()); its k-th real parameter is the one Effect::is_size(k) and the like mean.
+    Eigen::Index parameter_offset(std::size_t e) const { return offsets_[e]; }
     // "Rs", "Ld", "Lq", "psi_f", then "<effect>.<parameter>".
     const std::vector<std::string>& parameter_names() const { return names_; }
     // Whether the prediction is linear in effect parameter j (Effect::model_linear_in); false for the

@@ -505,18 +505,15 @@ void fit_pseudo_true(const Measurement& quiet, const ModelSpec& truth, const std
     const ModelFit without = fit_model(quiet, rest, options);
     const auto model = make_model(truth, quiet);
     const auto free = free_parameters(truth);
-    // The model's parameters: the base's, then each effect's real ones (is_size counts those alone).
-    std::size_t j = base_parameter_names.size();
     int added = 0;
-    for (const auto& effect : model->effects()) {
-        const bool wanted = std::find(effects.begin(), effects.end(), effect->name()) != effects.end();
-        std::size_t k = 0;
-        for (const auto& p : effect->parameter_specs()) {
-            if (p.type != ParameterType::Real) continue;
-            if (wanted && free[j]) ++added;
-            if (wanted && effect->is_size(k)) r.pseudo_true_size[model->parameter_names()[j]] = fit.values[static_cast<Eigen::Index>(j)];
-            ++k;
-            ++j;
+    const auto& laws = model->effects();
+    for (std::size_t e = 0; e < laws.size(); ++e) {
+        if (std::find(effects.begin(), effects.end(), laws[e]->name()) == effects.end()) continue;
+        const Eigen::Index first = model->parameter_offset(e);
+        const Eigen::Index end = e + 1 < laws.size() ? model->parameter_offset(e + 1) : model->parameter_count();
+        for (Eigen::Index j = first; j < end; ++j) {
+            added += free[static_cast<std::size_t>(j)] ? 1 : 0;
+            if (laws[e]->is_size(static_cast<std::size_t>(j - first))) r.pseudo_true_size[model->parameter_names()[static_cast<std::size_t>(j)]] = fit.values[j];
         }
     }
     // As detection_limits() states a limit: the likelihood ratio in each axis's long-run noise, the
@@ -577,10 +574,15 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         result.data.source = source;
         // The same drive without sensor noise (what the noise a diagnosis measures, and a law's
         // pseudo-true values, are judged against).
-        auto quiet_data = [&] {
-            DriveSimulation quiet = parse_simulation_profile(case_profile(spec, c, r.seed), source, profile_of(c).parent_path());
-            quiet.noise = SensorNoise{};
-            return simulate(quiet).data;
+        // Simulated once, when first asked for.
+        std::optional<Measurement> quiet;
+        auto quiet_data = [&]() -> const Measurement& {
+            if (!quiet) {
+                DriveSimulation drive = parse_simulation_profile(case_profile(spec, c, r.seed), source, profile_of(c).parent_path());
+                drive.noise = SensorNoise{};
+                quiet = simulate(drive).data;
+            }
+            return *quiet;
         };
         std::optional<OperatingPoints> points;
         if (!result.data.has_segments()) {
@@ -611,12 +613,11 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         for (const auto& l : d.detection_limits)
             if (std::find(r.missed.begin(), r.missed.end(), l.effect) != r.missed.end()) r.missed_limits.push_back(l);
         if (!c.pseudo_true_sized.empty()) {
-            Measurement quiet = quiet_data();
-            if (points) quiet = select_operating_points(std::move(quiet), *points);
+            const Measurement selected = points ? select_operating_points(Measurement(quiet_data()), *points) : quiet_data();
             ModelSpec truth = model;
             for (const auto& e : c.truth)
                 if (!truth.contains(e)) truth = truth.with(e);
-            fit_pseudo_true(quiet, truth, c.pseudo_true_sized, options.fit, d.noise, r);
+            fit_pseudo_true(selected, truth, c.pseudo_true_sized, options.fit, d.noise, r);
         }
         for (const auto& effect : r.missed) {
             if (std::find(c.pseudo_true_sized.begin(), c.pseudo_true_sized.end(), effect) != c.pseudo_true_sized.end()) {
@@ -832,8 +833,8 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                       "(`pseudo_true_size`): each drive fits the law to the same drive without noise, and a miss counts as below "
                                       "the limit when that law, on this log and in the noise the diagnosis measured, gains a likelihood ratio short of "
                                       "what the search needs for its parameters, or changes the voltage by less than the relevant amount (the two "
-                                      "thresholds of each printed limit; records: `pseudo_true_size`, `pseudo_true_shows`). Its terms trade against "
-                                      "each other, so one of them may exceed its printed limit while the whole law shows less.",
+                                      "thresholds of each printed limit; records: `pseudo_true_size`, `pseudo_true_shows`). A printed limit is for one "
+                                      "term alone at its declared shape, so one term may exceed it while the whole law shows less.",
                                       joined(fitted, ", "))});
     doc.add(Heading{2, "Summary"});
     const bool designs = !spec.designs.empty();
