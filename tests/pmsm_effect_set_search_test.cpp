@@ -82,10 +82,12 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
     // code with the saturation law the diagnosis fits) on its nine operating points: the whole law's
     // six parameters do not predict left-out points (seed 1: 2 of 9), a law with fewer terms may.
     // Seeds and a noise level the study does not use (experiments/pmsm/detection_study.toml: seeds
-    // 1-20, 1 mA); the same drives without saturation as the control. Measured (2026-11-26): found
-    // alone in 10 of 10 drives at 1 mA and 7 of 10 at 2 mA, all 7 with fewer terms (found in none
-    // before); the clean drives 20 of 20 at base. Of the Ld, Lq and psi_f intervals of the drives
-    // found with fewer terms, 0 missed the plant's value at 1 mA and 5 at 2 mA, each with its caveat.
+    // 1-20, 1 mA); the same drives without saturation as the control. Measured (2026-11-26, only the
+    // held-out segments that decide voting): found alone in 10 of 10 drives at 1 mA (7 with fewer
+    // terms) and 8 of 10 at 2 mA, all 8 with fewer terms (with every segment voting: 10 (4) and 7 (7);
+    // with whole laws only, 0 at 2 mA); the clean drives 20 of 20 at base. Of the Ld, Lq and psi_f
+    // intervals of the drives found with fewer terms, 0 missed the plant's value at 1 mA and 5 at
+    // 2 mA, each with its caveat.
     const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_diagnosis_profile.toml";
     const auto law = make_effect("saturation");
     const auto saturation_terms = law->law_terms();
@@ -153,4 +155,36 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
         CHECK(reduced >= 1);
         CHECK(clean_quiet == seeds);
     }
+}
+
+TEST_CASE("while a harmonic no library law makes is left, every held-out segment votes, so a law does not take the missing effect's "
+          "segment means",
+          "[pmsm][diagnosis][search][hidden]") {
+    // The 100 kW machine's 2 % gain error of the phase a current sensor, which the library lacks
+    // (its signature is a second harmonic of the electrical angle). Its segment means follow the
+    // current's size, which the saturation law can take and predict on the segments whose held-out
+    // error it changes; the coin tosses of the others had kept it out. Seeds the study does not use
+    // (experiments/pmsm/detection_study_100kw.toml: 1-20). Measured (2026-11-26): "not in the library"
+    // with nothing added in 6 of 10, saturation added (with fewer terms) in 4; with only the segments
+    // that decide voting whatever the residual holds, 3 and 7 (the study's 20 seeds: 14 and 6 now, 5
+    // and 15 that way). The second harmonic is named in 10 of 10 either way.
+    const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_100kw_profile.toml";
+    constexpr int seeds = 10;
+    int not_in_library = 0, saturation = 0;
+    for (int seed = 101; seed < 101 + seeds; ++seed) {
+        auto drive = read_simulation_profile(profile);
+        drive.seed = static_cast<std::uint64_t>(seed);
+        drive.device->current_sensors.gain_a = 1.02;
+        DiagnosisOptions options;
+        options.pole_pairs = drive.motor.pole_pairs;
+        const Diagnosis d = diagnose(simulate(drive).data, parse_model_spec("base"), options);
+        INFO("seed " << seed << ": recommended " << d.recommended.text());
+        not_in_library += d.not_in_library && d.recommended.effects.empty() ? 1 : 0;
+        saturation += d.recommended.contains("saturation") ? 1 : 0;
+        // Whatever is recommended, the second harmonic is named: no library law makes it.
+        CHECK(std::any_of(d.outside_harmonics.begin(), d.outside_harmonics.end(), [](const Harmonic& h) { return h.order == 2; }));
+    }
+    INFO("not in the library, nothing added: " << not_in_library << " of " << seeds << "; saturation added: " << saturation);
+    CHECK(not_in_library >= 5);
+    CHECK(saturation <= 5);
 }

@@ -168,6 +168,9 @@ struct UnpredictiveAddition {
     int added_parameters = 0;
     int better = 0;             // left-out segments it predicts better than that set
     int segments = 0;
+    // Of the segments whose held-out error it changes by 1 % or more (HeldOutComparison::deciding).
+    int better_deciding = 0;
+    int deciding = 0;
 };
 
 struct Harmonic {

@@ -11,6 +11,7 @@
 
 #include "problems/pmsm/diagnosis/design.hpp"
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
+#include "problems/pmsm/diagnosis/library_orders.hpp"
 #include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/diagnosis/noise.hpp"
 #include "problems/pmsm/diagnosis/verdict.hpp"
@@ -72,6 +73,15 @@ std::vector<Addition> reduced_laws(const Measurement& data, const ModelFit& curr
     return out;
 }
 
+// "4 of 9 left-out segments (4 of the 6 it changes by 1 % or more)".
+std::string held_out_count(const HeldOutComparison& h) {
+    std::string text = fmt::format("{} of {} left-out segments", h.better, h.folds.size());
+    if (h.deciding > 0 && h.deciding < static_cast<int>(h.folds.size()))
+        text += fmt::format(" ({} of the {} it changes by {:g} % or more)", h.better_deciding, h.deciding,
+                            100.0 * relevant_voltage * relevant_voltage);
+    return text;
+}
+
 // "d_even only (q_self, q_knee, ... held at their defaults)": what a reduced law keeps and holds.
 std::string kept_and_held(const Addition& reduced) {
     const EffectTerm& term = reduced.fit.spec.effects.back();
@@ -101,12 +111,26 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     // effect missing on top of it must be most of that remainder, not a slice of it. Measured on the
     // Baldor study (docs/effects.md): a voltage, encoder or current offset that took about a tenth of
     // what the saturation law leaves was added in 90 of 240 drives.
+    std::optional<LackOfFit> left;
+    const auto left_by_current = [&]() -> const LackOfFit& {
+        if (!left) {
+            Eigen::VectorXd storage;
+            left = lack_of_fit(data, current, residual_of(data, current, storage), noise);
+        }
+        return *left;
+    };
     double share = relevant_share;
-    if (!current.spec.effects.empty()) {
-        Eigen::VectorXd storage;
-        const LackOfFit left = lack_of_fit(data, current, residual_of(data, current, storage), noise);
-        if (at_noise_floor(left, options.floor_tolerance, law_allowance(data, current, noise))) share = most_of_the_excess;
-    }
+    if (!current.spec.effects.empty() && at_noise_floor(left_by_current(), options.floor_tolerance, law_allowance(data, current, noise)))
+        share = most_of_the_excess;
+    // The held-out vote (docs/diagnosis.md, section 1). Only the segments whose held-out error the
+    // candidate changes by a relevant amount vote: elsewhere the two predict alike and the noise
+    // tosses a coin. But while the residual holds a harmonic no library law makes, something outside
+    // the library is there, and its segment means are what a law of several terms can take and
+    // predict: then every segment votes, as before the change. Asked only where the two votes differ.
+    const auto predicts = [&](const HeldOutComparison& h) {
+        if (h.predicts() == h.predicts_where_deciding()) return h.predicts();
+        return harmonics_outside_library(left_by_current(), current.spec, noise).empty() ? h.predicts_where_deciding() : h.predicts();
+    };
     // Whether an addition removes a relevant share of the excess and changes the voltage by a relevant amount.
     const auto relevant = [&](const Addition& a) {
         const double change = current.rss() - a.fit.rss();
@@ -149,16 +173,16 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
                 strongest = std::move(r);
             }
         if (!strongest || (choice.reduced && strongest_dbic >= reduced_dbic)) return;
-        std::string predicts;
+        std::string predicts_text;
         if (!current_folds.empty()) {
             const HeldOutComparison held_out = compare_held_out(data, strongest->fit, current_folds);
-            if (!held_out.predicts()) return;
-            predicts = fmt::format(" and predicts {} of {} left-out segments better", held_out.better, held_out.folds.size());
+            if (!predicts(held_out)) return;
+            predicts_text = " and predicts " + held_out_count(held_out) + " better";
         }
         reduced_dbic = strongest_dbic;
         choice.reduced_law = fmt::format("{} with {}: the whole law, with {} parameters, {}; with {} it has dBIC {:.1f}{}", a.effect,
                                          kept_and_held(*strongest), a.added_parameters, why, strongest->added_parameters, strongest_dbic,
-                                         predicts);
+                                         predicts_text);
         choice.reduced = std::make_shared<const Addition>(std::move(*strongest));
         choice.whole_law_base = a.fit.values.head(4);
     };
@@ -169,14 +193,14 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
             break;
         }
         const HeldOutComparison held_out = compare_held_out(data, a.fit, current_folds);
-        if (held_out.predicts()) {
+        if (predicts(held_out)) {
             chosen = k;
             break;
         }
         choice.unpredictive.push_back({a.effect, supported[k].first, excess > 0.0 ? (current.rss() - a.fit.rss()) / excess : 0.0,
-                                       a.added_parameters, held_out.better, static_cast<int>(held_out.folds.size())});
-        offer_reduced(a, fmt::format("predicts only {} of {} left-out segments better than {}", held_out.better, held_out.folds.size(),
-                                     current.spec.text()));
+                                       a.added_parameters, held_out.better, static_cast<int>(held_out.folds.size()), held_out.better_deciding,
+                                       held_out.deciding});
+        offer_reduced(a, fmt::format("predicts only {} better than {}", held_out_count(held_out), current.spec.text()));
     }
     // A whole law whose evidence does not pay for its parameters, although it removes more than
     // chance would (a likelihood-ratio test, p < 0.001) and a relevant part of the excess: a law with
@@ -213,7 +237,8 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
             !close && std::max(most_distinct(design_unique_fractions(design, current.spec, current.values, other.effect, best.effect)),
                                most_distinct(design_unique_fractions(design, current.spec, current.values, best.effect, other.effect))) <
                           clear_above;
-        if ((close || confounded) && predicts_held_out(data, other.fit, current_folds)) choice.tie.push_back(other.effect);
+        if ((close || confounded) && (current_folds.empty() || predicts(compare_held_out(data, other.fit, current_folds))))
+            choice.tie.push_back(other.effect);
     }
     return choice;
 }

@@ -167,7 +167,14 @@ void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std
 HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds) {
     HeldOutComparison c;
     c.folds = leave_one_segment_out(data, candidate);
-    for (std::size_t k = 0; k < c.folds.size(); ++k) c.better += c.folds[k] < model_folds[k] ? 1 : 0;
+    for (std::size_t k = 0; k < c.folds.size(); ++k) {
+        const bool better = c.folds[k] < model_folds[k];
+        c.better += better ? 1 : 0;
+        if (std::abs(c.folds[k] - model_folds[k]) >= evidence::relevant_voltage * evidence::relevant_voltage * model_folds[k]) {
+            ++c.deciding;
+            c.better_deciding += better ? 1 : 0;
+        }
+    }
     return c;
 }
 

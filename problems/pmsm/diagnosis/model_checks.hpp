@@ -25,9 +25,16 @@ double pooled_rms(const std::vector<double>& sse, Eigen::Index samples);
 struct HeldOutComparison {
     std::vector<double> folds;  // the candidate's leave_one_segment_out
     int better = 0;             // segments it predicts better than the model does
+    // The segments whose held-out squared error the candidate changes by at least
+    // evidence::relevant_voltage^2 (1 %) of the model's, and how many of them it predicts better.
+    // Elsewhere the two predict alike and the noise decides which is "better": a coin toss.
+    int deciding = 0;
+    int better_deciding = 0;
     // A majority of held-out segments, not the pooled error: one operating point at the edge of the
     // range, where a polynomial extrapolates, must not outvote all the others.
     bool predicts() const { return 2 * better >= static_cast<int>(folds.size()); }
+    // The same majority (half passes) of the segments that decide; predicts() when none does.
+    bool predicts_where_deciding() const { return deciding == 0 ? predicts() : 2 * better_deciding >= deciding; }
 };
 
 // `model_folds`: the extended model's leave_one_segment_out (not empty).

@@ -95,7 +95,8 @@ json diagnosis_json(const Diagnosis& d) {
     auto unpredictive = nlohmann::ordered_json::array();
     for (const auto& u : d.unpredictive)
         unpredictive.push_back({{"effect", u.effect}, {"dbic", u.delta_bic}, {"explained", u.explained}, {"added_parameters", u.added_parameters},
-                                {"held_out_better", u.better}, {"held_out_segments", u.segments}});
+                                {"held_out_better", u.better}, {"held_out_segments", u.segments},
+                                {"held_out_better_deciding", u.better_deciding}, {"held_out_deciding", u.deciding}});
     out["unpredictive_additions"] = unpredictive;
     out["findings"] = d.findings;
     json limits = json::array();
