@@ -19,7 +19,8 @@
 // 11: Effect gained material_value (a virtual: a parameter's value in the machine's material).
 // 12: Effect gained law_terms (a virtual: the separate terms of its law, which a search may drop).
 // 13: Effect gained angle_orders (a virtual: the harmonics of the electrical angle its law makes).
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 13
+// 14: Effect::unseen_bias returns an UnseenBias (its sentence and the base parameters it moves).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 14
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

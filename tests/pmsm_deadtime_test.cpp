@@ -8,22 +8,17 @@
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/simulation/drive_simulator.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
+#include "tests/pmsm_diagnosis_fixture.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;
+using namespace mhb::pmsm::testing;
 
 namespace {
 
-// The device study's clean drive (nine operating points at +-10 and +-45 r/min) with a dead time
-// and no noise, fitted with base+deadtime: the base parameters' relative errors.
+// The device study's drive with a dead time and no noise, fitted with base+deadtime.
 Eigen::Vector4d relative_errors_with_dead_time(double dead_time) {
-    auto drive = read_simulation_profile(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "device_diagnosis_profile.toml");
-    drive.noise = SensorNoise{};
-    drive.device->inverter.dead_time = dead_time;
-    const auto result = simulate(drive);
-    const ModelFit fit = fit_model(result.data, parse_model_spec("base+deadtime"), FitOptions{});
-    const Eigen::Vector4d truth{drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f};
-    return fit.values.head<4>().cwiseQuotient(truth).array() - 1.0;
+    return noise_free_device_errors("base+deadtime", [&](DeviceSettings& device) { device.inverter.dead_time = dead_time; });
 }
 
 }  // namespace
@@ -45,14 +40,12 @@ TEST_CASE("dead time biases the base parameters by the pulse shift the effect st
 }
 
 TEST_CASE("a fit holding dead time states its pulse-shift bias per microsecond", "[pmsm][deadtime]") {
-    ModelFit fit;
-    fit.spec = parse_model_spec("base+deadtime");
-    fit.values = Eigen::VectorXd::Zero(6);
-    fit.values.head<4>() << 46.0, 0.02025, 0.03, 0.04375;
+    ModelFit fit = fit_at("base+deadtime", {46.0, 0.02025, 0.03, 0.04375});
     const auto biases = fit.unseen_biases();
     REQUIRE(biases.size() == 1);
     // R_s / (2 L) per microsecond with the smaller inductance: 46 / 0.0405 * 1e-6 = 0.114 %.
-    CHECK(biases.front().find("up to 0.11 % per microsecond") != std::string::npos);
+    CHECK(biases.front().text.find("up to 0.11 % per microsecond") != std::string::npos);
+    CHECK(biases.front().base == std::array<bool, 4>{true, true, true, true});
     fit.spec = parse_model_spec("base+voltage_offset");
     CHECK(fit.unseen_biases().empty());
 }

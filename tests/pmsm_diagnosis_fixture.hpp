@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
+#include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
 #include "tests/mhbench_cli.hpp"
 
@@ -45,6 +46,31 @@ inline const Measurement& diagnosis_data(const std::vector<HiddenEffect>& effect
     std::string key = "diagnosis";
     for (const auto& e : effects) key += "+" + e.name;
     return simulated(key, "diagnosis_profile.toml", effects);
+}
+
+// The device study's drive (device_diagnosis_profile.toml: nine operating points at +-10 and +-45
+// r/min) without noise, its plant changed by `change`, fitted with `model`: the base parameters'
+// relative errors against the motor's (small-current) values.
+template <class Change>
+Eigen::Vector4d noise_free_device_errors(const std::string& model, Change change) {
+    auto drive = read_simulation_profile(profile_path("device_diagnosis_profile.toml"));
+    drive.noise = SensorNoise{};
+    change(*drive.device);
+    const ModelFit fit = fit_model(simulate(drive).data, parse_model_spec(model), FitOptions{});
+    const Eigen::Vector4d truth{drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f};
+    return fit.values.head<4>().cwiseQuotient(truth).array() - 1.0;
+}
+
+// A fit of `model` whose base parameters are `base` and its effects' parameters zero: enough for what
+// an effect states from the base values alone (Effect::unseen_bias).
+inline ModelFit fit_at(const std::string& model, const Eigen::Vector4d& base) {
+    ModelFit fit;
+    fit.spec = parse_model_spec(model);
+    Eigen::Index count = 4;
+    for (const auto& term : fit.spec.effects) count += static_cast<Eigen::Index>(make_effect(term.name)->parameter_names().size());
+    fit.values = Eigen::VectorXd::Zero(count);
+    fit.values.head<4>() = base;
+    return fit;
 }
 
 }  // namespace mhb::pmsm::testing

@@ -27,7 +27,7 @@ std::vector<IntervalCaveat> interval_caveats(const Measurement& data, const Diag
     std::vector<IntervalCaveat> out;
     const bool from_path = !d.path.empty() && d.path[d.recommended_step].fit.spec.text() == d.recommended.text();
     const ModelFit& recommended = from_path ? d.path[d.recommended_step].fit : d.model;
-    for (auto& bias : recommended.unseen_biases()) out.push_back({std::move(bias), {true, true, true, true}});
+    for (auto& bias : recommended.unseen_biases()) out.push_back({std::move(bias.text), bias.base});
     if (!from_path) return out;
 
     std::optional<ModelFit> with_intervals;

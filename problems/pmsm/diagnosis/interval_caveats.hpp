@@ -7,7 +7,7 @@
 namespace mhb::pmsm {
 
 // For `d`, diagnosed up to its recommendation: the biases the recommended effects' laws state
-// (Effect::unseen_bias: each concerns all four base parameters) and, for a law the search reduced to
+// (Effect::unseen_bias, each on the base parameters it moves) and, for a law the search reduced to
 // fewer terms, the base parameters whose whole-law value lies outside their interval: the held
 // terms are a choice the log could not check, and those intervals hold only if the terms are absent.
 // The recommended fit is polished once with intervals when a reduced law is among its effects.

@@ -78,13 +78,13 @@ public:
     // t_d / 2 and the current sampled at the carrier peak is its period average plus t_d / 2 of
     // L^-1 u: the fit then sees R / (1 + R t_d / (2 L)), and the flux terms likewise. A shift of
     // half a microsecond is far below any log's delay limit, so only the inverter's settings say it.
-    std::string unseen_bias(const double* base) const override {
+    UnseenBias unseen_bias(const double* base) const override {
         const double per_microsecond = 100.0 * 0.5e-6 * base[0] / std::min(base[1], base[2]);
         if (!(per_microsecond > 0.0) || !std::isfinite(per_microsecond)) return {};  // an implausible fit (L <= 0) says nothing
-        return fmt::format("dead time shifts each PWM pulse by half the dead time t_d, so currents sampled at the carrier peak are not "
-                           "their period averages: Rs, Ld, Lq and psi_f read low by about Rs t_d / (2 L), up to {:.2g} % per microsecond "
-                           "of t_d here (t_d = deadtime.voltage / (f_sw V_dc) less the devices' share); the intervals do not hold it",
-                           per_microsecond);
+        return {fmt::format("dead time shifts each PWM pulse by half the dead time t_d, so currents sampled at the carrier peak are not "
+                            "their period averages: Rs, Ld, Lq and psi_f read low by about Rs t_d / (2 L), up to {:.2g} % per microsecond "
+                            "of t_d here (t_d = deadtime.voltage / (f_sw V_dc) less the devices' share); the intervals do not hold it",
+                            per_microsecond)};
     }
 
     void model(ModelStage, const double* p, ModelState& s) const override {

@@ -12,6 +12,7 @@
 //
 // Real parameters (in declaration order) are what a fit varies; their declared range is the
 // physically plausible range and doubles as the search box. Text parameters configure the plant only.
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -40,6 +41,13 @@ namespace mhb::pmsm {
 //   ControllerFrame true rotor frame -> controller frame (voltage)
 //   Delay           applied voltage -> the earlier command that produced it
 //   LoggedVoltage   command -> logged reference
+// A bias on the base parameters that no steady-state log shows (Effect::unseen_bias): one sentence
+// for the user, and which of Rs, Ld, Lq and psi_f it moves (their intervals do not hold it).
+struct UnseenBias {
+    std::string text;
+    std::array<bool, 4> base{true, true, true, true};
+};
+
 enum class ModelStage : unsigned {
     SensorCurrents = 1u << 0,
     SensorAngle = 1u << 1,
@@ -168,8 +176,8 @@ public:
     // it is the law's own error, not a missing effect (docs/diagnosis.md, "The laws' accuracy").
     virtual double law_accuracy() const { return 0.0; }
     // A bias the effect puts on the base parameters that no steady-state log can show, so that no
-    // interval holds it, told to the user (empty: none). `base` holds Rs, Ld, Lq and psi_f as fitted.
-    virtual std::string unseen_bias(const double* /*base*/) const { return {}; }
+    // interval holds it, told to the user (text empty: none). `base` holds Rs, Ld, Lq and psi_f as fitted.
+    virtual UnseenBias unseen_bias(const double* /*base*/) const { return {}; }
 
     // ---- what the data allow ----
     // Sets the plausible range [lo, hi] of real parameter k, given as the declared one, to what data

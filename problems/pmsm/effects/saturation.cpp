@@ -68,6 +68,20 @@ public:
     double law_accuracy() const override { return 0.02; }
     std::vector<int> angle_orders() const override { return {}; }  // the fluxes follow the rotor-frame currents alone
 
+    // The current i(psi) is convex where the incremental inductance falls with the current, so over
+    // a carrier period's flux ripple (its midpoint is what the sample at the carrier peak reads) the
+    // mean current exceeds the sample by half i'' times the flux's variance: -(dL/di) di_pp^2 / (24 L)
+    // for a triangular ripple. The voltage drop is Rs times the mean; the fluxes, at the midpoint,
+    // are moved much less (tests/pmsm_saturation_test.cpp). Its size needs the ripple, which only
+    // the inverter's V_dc and f_sw give, so the sentence gives the formula.
+    UnseenBias unseen_bias(const double* /*base*/) const override {
+        return {"with saturating iron a current sampled at the carrier peak is the midpoint of the ripple in flux, not the period's "
+                "mean current: Rs reads high by about (-(dL/di) / L) di_pp^2 / (24 |i|) (di_pp the ripple peak to peak, L the incremental "
+                "inductance along the current), which falls with the carrier frequency squared; the flux terms, which see the midpoint, "
+                "much less; the Rs interval does not hold it",
+                {true, false, false, false}};
+    }
+
     bool range_end_implausible(std::size_t k) const override { return k != 1 && k != 3; }
     std::string range_end_meaning(std::size_t k, bool upper) const override {
         switch (k) {

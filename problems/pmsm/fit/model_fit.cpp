@@ -601,12 +601,12 @@ Eigen::Index ModelFit::index_of(const std::string& name) const {
     return -1;
 }
 
-std::vector<std::string> ModelFit::unseen_biases() const {
-    std::vector<std::string> out;
+std::vector<UnseenBias> ModelFit::unseen_biases() const {
+    std::vector<UnseenBias> out;
     if (values.size() < 4) return out;
     // The bias is the law's, not the fit's: an effect made from its name says it.
     for (const auto& term : spec.effects)
-        if (auto text = make_effect(term.name)->unseen_bias(values.data()); !text.empty()) out.push_back(std::move(text));
+        if (auto bias = make_effect(term.name)->unseen_bias(values.data()); !bias.text.empty()) out.push_back(std::move(bias));
     return out;
 }
 

@@ -94,8 +94,8 @@ struct ModelFit {
     // fit searched, SteadyStateModel::plausible).
     bool beyond_range(Eigen::Index j) const;
     // What the model's effects do to the base parameters that no log shows (Effect::unseen_bias), one
-    // sentence each: biases the intervals do not hold.
-    std::vector<std::string> unseen_biases() const;
+    // sentence each and the parameters it moves: biases the intervals do not hold.
+    std::vector<UnseenBias> unseen_biases() const;
 };
 
 // Fits `spec` to all rows of `data`. Effect parameters listed in `search` (indices into the model's

@@ -61,7 +61,8 @@ json fit_json(const ModelFit& fit) {
     out["uncertainty"] = {{"method", to_string(fit.uncertainty.method)},
                           {"axis_rho", {{"u_d", fit.uncertainty.axis_rho.size() ? fit.uncertainty.axis_rho[0] : 0.0},
                                         {"u_q", fit.uncertainty.axis_rho.size() > 1 ? fit.uncertainty.axis_rho[1] : 0.0}}}};
-    if (const auto biases = fit.unseen_biases(); !biases.empty()) out["uncertainty"]["unseen_biases"] = biases;
+    if (const auto biases = fit.unseen_biases(); !biases.empty())
+        for (const auto& bias : biases) out["uncertainty"]["unseen_biases"].push_back(bias.text);
     out["segments"] = segments_json(fit.segments);
     return out;
 }
@@ -80,7 +81,7 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
     if (std::find(fit.segment_spread.begin(), fit.segment_spread.end(), true) != fit.segment_spread.end())
         t += "(*) interval widened to the spread over segments: the segments pull this parameter, or one it trades against, apart by more "
              "than the noise would, so the model misses structure between them\n";
-    for (const auto& bias : fit.unseen_biases()) t += "note: " + bias + "\n";
+    for (const auto& bias : fit.unseen_biases()) t += "note: " + bias.text + "\n";
     t += fmt::format("\nresidual rms: u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n", fit.rms.d, fit.rms.q, fit.rms.total);
     if (fit.segments.size() > 1) {
         t += fmt::format("\n{:<28} {:>6} {:>11} {:>11} {:>11}\n", "segment", "rows", "u_d (V)", "u_q (V)", "total (V)");
