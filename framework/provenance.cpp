@@ -8,12 +8,11 @@
 #include <sys/utsname.h>
 #include <unistd.h>
 
-// CMake defines both for this file alone (CMakeLists.txt), so a new commit recompiles only this file.
+// For this file alone (CMakeLists.txt), so a new commit or an edit recompiles only this file: CMake
+// defines the version, and stamps the commit at every build into the header included here.
+#include "mhbench_provenance_stamp.hpp"
 #ifndef MHBENCH_VERSION
 #error "MHBENCH_VERSION is defined by CMakeLists.txt"
-#endif
-#ifndef MHBENCH_GIT_COMMIT
-#error "MHBENCH_GIT_COMMIT is defined by CMakeLists.txt"
 #endif
 
 namespace mhb {
