@@ -178,11 +178,6 @@ HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& cand
     return c;
 }
 
-bool predicts_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds) {
-    if (model_folds.empty()) return true;
-    return compare_held_out(data, candidate, model_folds).predicts();
-}
-
 void apparent_values(const SteadyStateModel& model, const ModelFit& fit, const Eigen::VectorXd& residual, const NoiseEstimate& noise,
                      std::vector<SegmentConditions>& segments,
                      std::vector<std::string>& names) {

@@ -40,10 +40,6 @@ struct HeldOutComparison {
 // `model_folds`: the extended model's leave_one_segment_out (not empty).
 HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);
 
-// Whether `candidate` predicts held-out segments at least as well as the model it extends on a
-// majority of them (true without leave-one-out, `model_folds` empty).
-bool predicts_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);
-
 // The structure a fit's effect laws may leave by their stated accuracy (Effect::law_accuracy): the
 // largest accuracy among them, squared, times the power of the voltage the flux linkage makes
 // (u - Rs i, every row), relative to the noise power. Zero when no law states an error.
