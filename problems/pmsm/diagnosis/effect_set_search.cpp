@@ -73,15 +73,6 @@ std::vector<Addition> reduced_laws(const Measurement& data, const ModelFit& curr
     return out;
 }
 
-// "4 of 9 left-out segments (4 of the 6 it changes by 1 % or more)".
-std::string held_out_count(const HeldOutComparison& h) {
-    std::string text = fmt::format("{} of {} left-out segments", h.better, h.folds.size());
-    if (h.deciding > 0 && h.deciding < static_cast<int>(h.folds.size()))
-        text += fmt::format(" ({} of the {} it changes by {:g} % or more)", h.better_deciding, h.deciding,
-                            100.0 * relevant_voltage * relevant_voltage);
-    return text;
-}
-
 // "d_even only (q_self, q_knee, ... held at their defaults)": what a reduced law keeps and holds.
 std::string kept_and_held(const Addition& reduced) {
     const EffectTerm& term = reduced.fit.spec.effects.back();

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/diagnosis/verdict.hpp"
 
 namespace mhb::pmsm {
@@ -322,12 +323,8 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
         f.push_back(fmt::format("{} would explain {:.0f} % of what {} leaves (dBIC {:.1f} in the search over sets), but fitted without one operating "
                                 "point it predicts that point better than {} in only {} of {}{}: the {} operating points do not pin its {} "
                                 "parameters, so it is not added. More operating points (other currents and speeds) would decide.",
-                                u.effect, 100.0 * u.explained, after, u.delta_bic, after, u.better, u.segments,
-                                u.deciding > 0 && u.deciding < u.segments
-                                    ? fmt::format(" ({} of the {} whose prediction it changes by {:g} % or more)", u.better_deciding, u.deciding,
-                                                  100.0 * evidence::relevant_voltage * evidence::relevant_voltage)
-                                    : "",
-                                u.segments, u.added_parameters));
+                                u.effect, 100.0 * u.explained, after, u.delta_bic, after,
+                                u.better, u.segments, deciding_count(u.better_deciding, u.deciding, u.segments), u.segments, u.added_parameters));
     mechanical_findings(d, floor_tolerance, f);
     if (!d.model_intervals_valid())
         f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",

@@ -25,6 +25,9 @@ inline constexpr double most_of_the_excess = 0.5;
 // one sample).
 inline constexpr double relevant_share = 0.1;
 inline constexpr double relevant_voltage = 0.1;
+// A held-out segment decides between a candidate and the model when the candidate changes its
+// squared prediction error by at least this fraction: the relevant voltage's, squared (1 %).
+inline constexpr double deciding_change = relevant_voltage * relevant_voltage;
 
 }  // namespace mhb::pmsm::evidence
 
