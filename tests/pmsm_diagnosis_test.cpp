@@ -177,8 +177,8 @@ TEST_CASE("an effect turned down for its held-out prediction is named with what 
     CHECK(u.effect == "saturation");
     CHECK(u.delta_bic < -10.0);
     CHECK(u.explained > 0.5);
-    CHECK(u.segments == 9);
-    CHECK(2 * u.better < u.segments);
+    CHECK(u.held_out.segments == 9);
+    CHECK(2 * u.held_out.better < u.held_out.segments);
     CHECK(std::any_of(d.findings.begin(), d.findings.end(),
                       [](const std::string& f) { return f.rfind("saturation would explain", 0) == 0; }));
     CHECK(diagnosis_json(d).at("unpredictive_additions").size() == 1);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "problems/pmsm/diagnosis/verdict.hpp"
 
@@ -20,10 +21,11 @@ Candidate candidate(double delta_bic, bool plausible = true, Identifiability ide
     return c;
 }
 
+// Every segment decides (or none: the same vote), so no harmonic is asked for.
 Candidate held_out(double delta_bic, int better, int segments) {
     Candidate c = candidate(delta_bic);
-    c.loso_better = better;
-    c.loso_segments = segments;
+    c.held_out = {better, segments, better, segments};
+    c.predicts_held_out = c.held_out.passes([]() -> bool { throw std::logic_error("asked for harmonics where the votes agree"); });
     return c;
 }
 
@@ -45,6 +47,32 @@ TEST_CASE("strong evidence needs a majority of held-out segments predicted at le
     CHECK(verdict_of(held_out(-50.0, 0, 5)) == Verdict::Weak);
     // Untested (no segments to hold out) counts as predicting.
     CHECK(verdict_of(held_out(-50.0, 0, 0)) == Verdict::Supported);
+}
+
+TEST_CASE("the held-out vote counts the deciding segments unless a harmonic outside the library is in the residual",
+          "[pmsm][diagnosis][verdict]") {
+    int asked = 0;
+    const auto outside = [&] { ++asked; return true; };
+    const auto inside = [&] { ++asked; return false; };
+    // 3 of 9 better, but 3 of the 4 that decide: the deciding segments pass it, every segment does not.
+    const HeldOutVote split{3, 9, 3, 4};
+    CHECK_FALSE(split.every_segment());
+    CHECK(split.where_deciding());
+    CHECK(split.passes(inside));
+    CHECK_FALSE(split.passes(outside));
+    CHECK(asked == 2);
+    // The reverse: 6 of 9 better, 1 of the 4 that decide.
+    const HeldOutVote reverse{6, 9, 1, 4};
+    CHECK_FALSE(reverse.passes(inside));
+    CHECK(reverse.passes(outside));
+    // No segment decides: every segment votes, and no harmonic is asked for.
+    asked = 0;
+    CHECK(HeldOutVote{5, 9, 0, 0}.passes(outside));
+    CHECK_FALSE(HeldOutVote{4, 9, 0, 0}.passes(inside));
+    CHECK(asked == 0);
+    // Half passes, in both counts.
+    CHECK(HeldOutVote{2, 9, 2, 4}.passes(inside));
+    CHECK_FALSE(HeldOutVote{2, 9, 2, 4}.passes(outside));
 }
 
 TEST_CASE("implausible values make strong evidence partial and the rest implausible, and unidentifiable overrides all",

@@ -42,7 +42,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     const ShaftAngle shaft = shaft_angle(data, options.pole_pairs);
     ModelCheck check = check_model(data, spec, baseline, out.noise, options, shaft);
     const auto proposals = experiment_proposals(data, check.segments);
-    score_candidates(out.candidates, data, design, proposals, baseline.model, out.noise, check.folds);
+    score_candidates(out.candidates, data, design, proposals, baseline.model, out.noise, check.folds, check.lack_of_fit);
     PathTrace trace = trace_path(data, search, baseline.model, check.lack_of_fit, out.noise, options.floor_tolerance, shaft);
     Recommendation r = recommend(spec, search, trace, check.lack_of_fit, design, proposals);
     // A harmonic that no law of the library makes, at any size, is missing physics however small

@@ -92,6 +92,42 @@ struct Absorption {
 
 // Partial: strong evidence and good prediction, but the values it takes alone are implausible: it
 // explains part of the excess residual while another effect is still missing (it biases the fit).
+// How many left-out segments a candidate predicts better than the model it extends, and the one rule
+// that reads a verdict from them (docs/diagnosis.md, section 1), for the single additions and the
+// search over sets alike.
+struct HeldOutVote {
+    int better = 0;    // segments it predicts better than the model does
+    int segments = 0;  // segments held out (0: untested)
+    // The segments whose held-out squared error the candidate changes by at least
+    // evidence::deciding_change (1 %) of the model's, and how many of them it predicts better.
+    // Elsewhere the two predict alike and the noise decides which is "better": a coin toss.
+    int better_deciding = 0;
+    int deciding = 0;
+
+    // Half of the held-out segments, not the pooled error: one operating point at the edge of the
+    // range, where a polynomial extrapolates, must not outvote all the others.
+    bool every_segment() const { return 2 * better >= segments; }
+    // The same share of the segments that decide; every_segment() when none does.
+    bool where_deciding() const { return deciding == 0 ? every_segment() : 2 * better_deciding >= deciding; }
+    // The deciding segments vote, except while the residual of the model being extended holds a
+    // harmonic no library law makes (`outside_harmonic()`, asked only where the two votes differ):
+    // then something outside the library is there, and its segment means are what a law of several
+    // terms can take and predict, so every segment votes.
+    template <class OutsideHarmonic>
+    bool passes(OutsideHarmonic&& outside_harmonic) const {
+        if (every_segment() == where_deciding()) return every_segment();
+        return outside_harmonic() ? every_segment() : where_deciding();
+    }
+};
+
+// " (4 of the 6 it changes by 1 % or more)" after "4 of 9": the count of the segments that
+// decide, when some but not all of the segments do; empty otherwise.
+std::string deciding_count(const HeldOutVote& vote);
+// "4 of 9 left-out segments (4 of the 6 it changes by 1 % or more)".
+inline std::string held_out_count(const HeldOutVote& vote) {
+    return std::to_string(vote.better) + " of " + std::to_string(vote.segments) + " left-out segments" + deciding_count(vote);
+}
+
 enum class Verdict { Supported, Partial, Weak, NotSupported, Implausible, NotIdentifiable };
 const char* to_string(Verdict verdict);
 
@@ -102,7 +138,8 @@ struct Candidate {
     double likelihood_ratio = 0.0;        // sum over axes of (RSS_model - RSS_candidate) / long-run variance
     double delta_bic = 0.0;               // -likelihood_ratio + added_parameters ln(effective samples)
     std::optional<double> loso_rms;       // leave-one-segment-out prediction error (V)
-    int loso_better = 0, loso_segments = 0;  // held-out segments predicted better than by the model
+    HeldOutVote held_out;                 // held-out segments predicted better than by the model
+    bool predicts_held_out = true;        // by held_out.passes (none tested counts as predicting)
     bool plausible = true;
     std::vector<std::string> implausible;  // why not
     Identifiability identifiability = Identifiability::Identifiable;
@@ -166,11 +203,7 @@ struct UnpredictiveAddition {
     double delta_bic = 0.0;     // the search's evidence for it
     double explained = 0.0;     // share of the excess residual of the set it would extend
     int added_parameters = 0;
-    int better = 0;             // left-out segments it predicts better than that set
-    int segments = 0;
-    // Of the segments whose held-out error it changes by 1 % or more (HeldOutComparison::deciding).
-    int better_deciding = 0;
-    int deciding = 0;
+    HeldOutVote held_out;       // against that set
 };
 
 struct Harmonic {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <optional>
 
 #include <boost/math/distributions/chi_squared.hpp>
 #include <fmt/format.h>
@@ -9,6 +11,7 @@
 #include "framework/input_error.hpp"
 #include "framework/registry.hpp"
 #include "problems/pmsm/diagnosis/lack_of_fit.hpp"
+#include "problems/pmsm/diagnosis/library_orders.hpp"
 #include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/diagnosis/noise.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
@@ -100,7 +103,8 @@ double explained_fraction(const ModelFit& model, const ModelFit& fit, double flo
 namespace {
 
 void score_candidate(Candidate& c, const Measurement& data, const Measurement& design, const std::vector<Proposal>& proposals,
-                     const ModelFit& model, const NoiseEstimate& noise, const std::vector<double>& model_folds) {
+                     const ModelFit& model, const NoiseEstimate& noise, const std::vector<double>& model_folds,
+                     const std::function<bool()>& outside_harmonic) {
     const ModelSpec& spec = model.spec;
     const double log_n = std::log(std::max(noise.effective_samples, 2.0));
     c.likelihood_ratio = likelihood_ratio(model, c.fit, noise);
@@ -118,8 +122,8 @@ void score_candidate(Candidate& c, const Measurement& data, const Measurement& d
     if (!model_folds.empty() && c.identifiability != Identifiability::NotIdentifiable && c.delta_bic < evidence::weak_bic) {
         const HeldOutComparison held_out = compare_held_out(data, c.fit, model_folds);
         c.loso_rms = pooled_rms(held_out.folds, data.size());
-        c.loso_segments = static_cast<int>(held_out.folds.size());
-        c.loso_better = held_out.better;
+        c.held_out = held_out.vote;
+        c.predicts_held_out = held_out.vote.passes(outside_harmonic);
     }
     c.verdict = verdict_of(c);
 }
@@ -128,8 +132,14 @@ void score_candidate(Candidate& c, const Measurement& data, const Measurement& d
 
 void score_candidates(std::vector<Candidate>& candidates, const Measurement& data, const Measurement& design,
                       const std::vector<Proposal>& proposals, const ModelFit& model, const NoiseEstimate& noise,
-                      const std::vector<double>& model_folds) {
-    for (auto& c : candidates) score_candidate(c, data, design, proposals, model, noise, model_folds);
+                      const std::vector<double>& model_folds, const LackOfFit& model_left) {
+    // Whether the model's residual holds a harmonic no library law makes, asked once and only if a vote needs it.
+    std::optional<bool> outside;
+    const std::function<bool()> outside_harmonic = [&] {
+        if (!outside) outside = !harmonics_outside_library(model_left, model.spec, noise).empty();
+        return *outside;
+    };
+    for (auto& c : candidates) score_candidate(c, data, design, proposals, model, noise, model_folds, outside_harmonic);
     // Supported and partial candidates are ordered by their evidence alone: an effect that explains
     // most of the residual but is biased by another missing one must not fall behind one that
     // explains little.

@@ -59,10 +59,11 @@ double explained_fraction(const ModelFit& model, const ModelFit& fit, double flo
 
 // Each candidate's evidence against `model` under `noise`, plausibility, identifiability on
 // `design` (with the experiments that would reveal it and what it is absorbed into when it is not
-// identifiable), held-out prediction against `model_folds` and verdict; then ranked best first.
+// identifiable), held-out prediction against `model_folds` (by HeldOutVote::passes, with the
+// harmonics of `model_left`, the model's lack of fit) and verdict; then ranked best first.
 void score_candidates(std::vector<Candidate>& candidates, const Measurement& data, const Measurement& design,
                       const std::vector<Proposal>& proposals, const ModelFit& model, const NoiseEstimate& noise,
-                      const std::vector<double>& model_folds);
+                      const std::vector<double>& model_folds, const LackOfFit& model_left);
 
 // The search's steps scored with the final noise, so that they compare with each other, and as the
 // search decided them (without overdispersion: the noise floor at the end is the safeguard).

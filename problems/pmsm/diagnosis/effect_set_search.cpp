@@ -113,14 +113,10 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     double share = relevant_share;
     if (!current.spec.effects.empty() && at_noise_floor(left_by_current(), options.floor_tolerance, law_allowance(data, current, noise)))
         share = most_of_the_excess;
-    // The held-out vote (docs/diagnosis.md, section 1). Only the segments whose held-out error the
-    // candidate changes by a relevant amount vote: elsewhere the two predict alike and the noise
-    // tosses a coin. But while the residual holds a harmonic no library law makes, something outside
-    // the library is there, and its segment means are what a law of several terms can take and
-    // predict: then every segment votes, as before the change. Asked only where the two votes differ.
+    // The held-out vote (docs/diagnosis.md, section 1; HeldOutVote::passes), asking for the
+    // harmonics outside the library only where the two counts differ.
     const auto predicts = [&](const HeldOutComparison& h) {
-        if (h.predicts() == h.predicts_where_deciding()) return h.predicts();
-        return harmonics_outside_library(left_by_current(), current.spec, noise).empty() ? h.predicts_where_deciding() : h.predicts();
+        return h.vote.passes([&] { return !harmonics_outside_library(left_by_current(), current.spec, noise).empty(); });
     };
     // Whether an addition removes a relevant share of the excess and changes the voltage by a relevant amount.
     const auto relevant = [&](const Addition& a) {
@@ -168,7 +164,7 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
         if (!current_folds.empty()) {
             const HeldOutComparison held_out = compare_held_out(data, strongest->fit, current_folds);
             if (!predicts(held_out)) return;
-            predicts_text = " and predicts " + held_out_count(held_out) + " better";
+            predicts_text = " and predicts " + held_out_count(held_out.vote) + " better";
         }
         reduced_dbic = strongest_dbic;
         choice.reduced_law = fmt::format("{} with {}: the whole law, with {} parameters, {}; with {} it has dBIC {:.1f}{}", a.effect,
@@ -189,9 +185,8 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
             break;
         }
         choice.unpredictive.push_back({a.effect, supported[k].first, excess > 0.0 ? (current.rss() - a.fit.rss()) / excess : 0.0,
-                                       a.added_parameters, held_out.better, static_cast<int>(held_out.folds.size()), held_out.better_deciding,
-                                       held_out.deciding});
-        offer_reduced(a, fmt::format("predicts only {} better than {}", held_out_count(held_out), current.spec.text()));
+                                       a.added_parameters, held_out.vote});
+        offer_reduced(a, fmt::format("predicts only {} better than {}", held_out_count(held_out.vote), current.spec.text()));
     }
     // A whole law whose evidence does not pay for its parameters, although it removes more than
     // chance would (a likelihood-ratio test, p < 0.001) and a relevant part of the excess: a law with

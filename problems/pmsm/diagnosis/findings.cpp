@@ -324,7 +324,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                 "point it predicts that point better than {} in only {} of {}{}: the {} operating points do not pin its {} "
                                 "parameters, so it is not added. More operating points (other currents and speeds) would decide.",
                                 u.effect, 100.0 * u.explained, after, u.delta_bic, after,
-                                u.better, u.segments, deciding_count(u.better_deciding, u.deciding, u.segments), u.segments, u.added_parameters));
+                                u.held_out.better, u.held_out.segments, deciding_count(u.held_out), u.held_out.segments, u.added_parameters));
     mechanical_findings(d, floor_tolerance, f);
     if (!d.model_intervals_valid())
         f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",

@@ -164,20 +164,22 @@ void check_effects(const ModelFit& fit, const Measurement& data, std::vector<std
     }
 }
 
-std::string deciding_count(int better_deciding, int deciding, int segments) {
-    if (deciding == 0 || deciding >= segments) return {};
-    return fmt::format(" ({} of the {} it changes by {:g} % or more)", better_deciding, deciding, 100.0 * evidence::deciding_change);
+std::string deciding_count(const HeldOutVote& vote) {
+    if (vote.deciding == 0 || vote.deciding >= vote.segments) return {};
+    return fmt::format(" ({} of the {} it changes by {:g} % or more)", vote.better_deciding, vote.deciding, 100.0 * evidence::deciding_change);
 }
 
 HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds) {
     HeldOutComparison c;
     c.folds = leave_one_segment_out(data, candidate);
+    HeldOutVote& v = c.vote;
+    v.segments = static_cast<int>(c.folds.size());
     for (std::size_t k = 0; k < c.folds.size(); ++k) {
         const bool better = c.folds[k] < model_folds[k];
-        c.better += better ? 1 : 0;
+        v.better += better ? 1 : 0;
         if (std::abs(c.folds[k] - model_folds[k]) >= evidence::deciding_change * model_folds[k]) {
-            ++c.deciding;
-            c.better_deciding += better ? 1 : 0;
+            ++v.deciding;
+            v.better_deciding += better ? 1 : 0;
         }
     }
     return c;

@@ -24,28 +24,8 @@ double pooled_rms(const std::vector<double>& sse, Eigen::Index samples);
 // A candidate's held-out prediction against the model it extends.
 struct HeldOutComparison {
     std::vector<double> folds;  // the candidate's leave_one_segment_out
-    int better = 0;             // segments it predicts better than the model does
-    // The segments whose held-out squared error the candidate changes by at least
-    // evidence::deciding_change (1 %) of the model's, and how many of them it predicts better.
-    // Elsewhere the two predict alike and the noise decides which is "better": a coin toss.
-    int deciding = 0;
-    int better_deciding = 0;
-    // A majority of held-out segments, not the pooled error: one operating point at the edge of the
-    // range, where a polynomial extrapolates, must not outvote all the others.
-    bool predicts() const { return 2 * better >= static_cast<int>(folds.size()); }
-    // The same majority (half passes) of the segments that decide; predicts() when none does.
-    bool predicts_where_deciding() const { return deciding == 0 ? predicts() : 2 * better_deciding >= deciding; }
+    HeldOutVote vote;
 };
-
-// " (4 of the 6 it changes by 1 % or more)" after "4 of 9": the count of the segments that
-// decide, when some but not all of the `segments` do; empty otherwise.
-std::string deciding_count(int better_deciding, int deciding, int segments);
-// "4 of 9 left-out segments (4 of the 6 it changes by 1 % or more)".
-inline std::string held_out_count(const HeldOutComparison& h) {
-    const int segments = static_cast<int>(h.folds.size());
-    return std::to_string(h.better) + " of " + std::to_string(segments) + " left-out segments" +
-           deciding_count(h.better_deciding, h.deciding, segments);
-}
 
 // `model_folds`: the extended model's leave_one_segment_out (not empty).
 HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);

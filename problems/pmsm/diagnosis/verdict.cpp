@@ -11,8 +11,7 @@ Identifiability identifiability_of(double unique) {
 }
 
 Verdict verdict_of(const Candidate& c) {
-    const bool predicts = 2 * c.loso_better >= c.loso_segments;  // as HeldOutComparison::predicts; true when untested
-    const bool strong = c.delta_bic <= supported_bic && predicts;
+    const bool strong = c.delta_bic <= supported_bic && c.predicts_held_out;
     if (c.identifiability == Identifiability::NotIdentifiable) return Verdict::NotIdentifiable;
     if (!c.plausible) return strong ? Verdict::Partial : Verdict::Implausible;
     if (strong) return Verdict::Supported;

@@ -37,7 +37,7 @@ namespace mhb::pmsm {
 Identifiability identifiability_of(double unique_fraction);
 
 // The verdict on a single addition from its identifiability, plausibility, delta_bic and held-out
-// prediction (loso_better of loso_segments; none tested counts as predicting).
+// prediction (predicts_held_out).
 Verdict verdict_of(const Candidate& c);
 
 // The order of the ranking: by verdict, supported and partial sharing a rank, then by evidence.

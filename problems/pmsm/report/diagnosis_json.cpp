@@ -95,8 +95,8 @@ json diagnosis_json(const Diagnosis& d) {
     auto unpredictive = nlohmann::ordered_json::array();
     for (const auto& u : d.unpredictive)
         unpredictive.push_back({{"effect", u.effect}, {"dbic", u.delta_bic}, {"explained", u.explained}, {"added_parameters", u.added_parameters},
-                                {"held_out_better", u.better}, {"held_out_segments", u.segments},
-                                {"held_out_better_deciding", u.better_deciding}, {"held_out_deciding", u.deciding}});
+                                {"held_out_better", u.held_out.better}, {"held_out_segments", u.held_out.segments},
+                                {"held_out_better_deciding", u.held_out.better_deciding}, {"held_out_deciding", u.held_out.deciding}});
     out["unpredictive_additions"] = unpredictive;
     out["findings"] = d.findings;
     json limits = json::array();
@@ -117,7 +117,9 @@ json diagnosis_json(const Diagnosis& d) {
         e["delta_bic"] = c.delta_bic;
         e["explained"] = c.explained;
         e["loso_rms"] = c.loso_rms ? json(*c.loso_rms) : json(nullptr);
-        e["loso_better_segments"] = c.loso_segments > 0 ? json::array({c.loso_better, c.loso_segments}) : json(nullptr);
+        e["loso_better_segments"] = c.held_out.segments > 0 ? json::array({c.held_out.better, c.held_out.segments}) : json(nullptr);
+        e["loso_better_deciding"] = c.held_out.segments > 0 ? json::array({c.held_out.better_deciding, c.held_out.deciding}) : json(nullptr);
+        e["predicts_held_out"] = c.predicts_held_out;
         e["identifiability"] = to_string(c.identifiability);
         e["unique_fraction"] = finite_or_null(c.unique_fraction);
         e["experiments"] = experiments_json(c.experiments);

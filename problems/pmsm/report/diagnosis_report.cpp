@@ -222,7 +222,8 @@ void add_candidates(Document& doc, const Diagnosis& d, const DiagnosisPlots& png
     for (std::size_t k = 0; k < d.candidates.size(); ++k) {
         const auto& c = d.candidates[k];
         candidates.add_row({std::to_string(k + 1), c.effect, fmt::format("**{}**", to_string(c.verdict)), mv(c.fit.rms.total), fmt::format("{:.1f}", c.delta_bic),
-                            c.loso_rms ? fmt::format("{}, {}/{}", mv(*c.loso_rms), c.loso_better, c.loso_segments) : std::string("—"),
+                            c.loso_rms ? fmt::format("{}, {}/{}{}", mv(*c.loso_rms), c.held_out.better, c.held_out.segments, deciding_count(c.held_out))
+                                       : std::string("—"),
                             c.plausible ? "yes" : "no: " + c.implausible.front(),
                             fmt::format("{} ({:.2g})", to_string(c.identifiability), c.unique_fraction)});
     }
