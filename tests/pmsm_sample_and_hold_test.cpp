@@ -10,12 +10,16 @@
 #include <complex>
 
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/model/model_spec.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 #include "problems/pmsm/simulation/drive_simulator.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb;
 using namespace mhb::pmsm;
@@ -94,4 +98,94 @@ TEST_CASE("the control period's sample and hold biases Ld and Lq as the closed f
         CHECK(std::abs(b.fitted[0]) < 1e-4);
         CHECK(std::abs(b.fitted[3]) < 1e-4);
     }
+}
+
+TEST_CASE("held_voltage is the closed form on an isotropic machine and the continuous model as the period vanishes",
+          "[pmsm][model][sample_and_hold]") {
+    const Eigen::Vector4d servo{46.0, 0.02025, 0.02025, 0.04375};
+    for (const double w : {0.0, 75.0, -300.0, 2000.0})
+        for (const C i : {C{0.0, 0.2}, C{-0.3, 0.1}, C{0.05, -0.4}}) {
+            const C continuous = (servo[0] + C{0.0, w * servo[1]}) * i + C{0.0, w * servo[3]};
+            for (const double period : {25e-6, 100e-6, 400e-6}) {
+                const C expected = held_over_continuous(w, servo[0] / servo[1], period) * continuous;
+                INFO("w " << w << ", i " << i << ", T " << period);
+                CHECK(std::abs(held_voltage(servo, w, i, period) - expected) < 1e-9 * std::abs(expected) + 1e-12);
+            }
+            // The anisotropic machine's continuous steady state as the period vanishes.
+            const Eigen::Vector4d salient{0.5, 0.006, 0.009, 0.3};
+            const C steady{salient[0] * i.real() - w * salient[2] * i.imag(), salient[0] * i.imag() + w * salient[1] * i.real() + w * salient[3]};
+            CHECK(std::abs(held_voltage(salient, w, i, 1e-9) - steady) < 1e-6 * std::abs(steady) + 1e-9);
+        }
+}
+
+namespace {
+
+// A noise-free device drive of `profile` at `control_period` with the carrier at `pwm_frequency`:
+// its fitted base parameters, the plant's, and the bias sample_and_hold_bias states from the fitted ones.
+struct Drive {
+    Measurement data;
+    Eigen::Vector4d fitted, truth, stated;
+};
+
+Drive noise_free_drive(const char* profile, double control_period, double pwm_frequency, double integration_step) {
+    auto drive = read_simulation_profile(profile_path(profile));
+    drive.noise = SensorNoise{};
+    drive.control.control_period = control_period;
+    drive.control.integration_step = integration_step;
+    drive.device->inverter.pwm_frequency = pwm_frequency;
+    Drive out;
+    out.data = simulate(drive).data;
+    const Measurement& data = out.data;
+    out.fitted = fit_model(data, parse_model_spec("base"), FitOptions{}).values.head<4>();
+    out.truth = {drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f};
+    out.stated = sample_and_hold_bias(data, out.fitted, control_period);
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("sample_and_hold_bias states what the device plant's control period does to a fit, salient machines included",
+          "[pmsm][model][sample_and_hold]") {
+    struct Setting {
+        const char* profile;
+        double control_period, pwm_frequency, integration_step;
+    };
+    for (const Setting s : {Setting{"device_diagnosis_profile.toml", 100e-6, 40e3, 2.5e-6}, Setting{"device_diagnosis_profile.toml", 200e-6, 40e3, 2.5e-6},
+                            Setting{"device_5kw_profile.toml", 125e-6, 32e3, 3.125e-6}}) {
+        const Drive d = noise_free_drive(s.profile, s.control_period, s.pwm_frequency, s.integration_step);
+        const Eigen::Vector4d before = d.fitted.cwiseQuotient(d.truth).array() - 1.0;
+        const Eigen::Vector4d after = (d.fitted - d.stated).cwiseQuotient(d.truth).array() - 1.0;
+        INFO(s.profile << " at " << s.control_period << " s: errors before " << before.transpose() << ", after " << after.transpose());
+        CHECK(after.cwiseAbs().maxCoeff() < 0.1 * before.cwiseAbs().maxCoeff());
+        CHECK(after.cwiseAbs().maxCoeff() < 2e-4);
+    }
+}
+
+TEST_CASE("fit and diagnose --control-period give the corrected base parameters; the dynamic model refuses it", "[pmsm][sample_and_hold][cli]") {
+    mhb::testing::TemporaryDirectory dir;
+    const auto csv = dir.path() / "held.csv";
+    const Drive d = noise_free_drive("device_diagnosis_profile.toml", 100e-6, 40e3, 2.5e-6);
+    write_measurement(csv, d.data);
+    const auto fit_json = dir.path() / "fit.json", diagnosis_json = dir.path() / "diagnosis.json";
+    const auto fit = run_mhbench("fit --data " + csv.string() + " --model base --control-period 100e-6 --json " + fit_json.string(), dir.path() / "log");
+    INFO(fit.output);
+    REQUIRE(fit.exit_code == 0);
+    CHECK(fit.output.find("sample and hold of the stated control period (100 µs)") != std::string::npos);
+    const auto held = nlohmann::json::parse(mhb::testing::read_file(fit_json)).at("sample_and_hold");
+    CHECK(held.at("control_period").get<double>() == 100e-6);
+    const std::array<const char*, 4> names{"Rs", "Ld", "Lq", "psi_f"};
+    for (std::size_t j = 0; j < 4; ++j) {
+        const auto& corrected = held.at("corrected").at(names[j]);
+        INFO(names[j]);
+        CHECK(corrected.at("value").get<double>() == Approx(d.truth[static_cast<Eigen::Index>(j)]).epsilon(2e-4));
+        CHECK(corrected.at("ci95").at(0).get<double>() <= corrected.at("value").get<double>());
+    }
+    const auto diagnosis = run_mhbench("diagnose --data " + csv.string() + " --model base --control-period 100e-6 --json " + diagnosis_json.string(),
+                                       dir.path() / "log");
+    REQUIRE(diagnosis.exit_code == 0);
+    CHECK(diagnosis.output.find("The stated control period (100 µs)") != std::string::npos);
+    CHECK(nlohmann::json::parse(mhb::testing::read_file(diagnosis_json)).contains("sample_and_hold"));
+    const auto dynamic = run_mhbench("fit --data " + csv.string() + " --model base --model-kind dynamic --control-period 100e-6", dir.path() / "log");
+    CHECK(dynamic.exit_code == 2);
+    CHECK(dynamic.output.find("--control-period") != std::string::npos);
 }

@@ -59,11 +59,13 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         options.fit = fit_options(*o);
         options.pole_pairs = columns.pole_pairs.value_or(0);
         options.reduced_laws = !o->whole_laws;
+        options.control_period = o->control_period;
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())
-            fmt::print("\nnext: mhbench fit --data {}{} --model {}\n", shell_word(o->data), data_reading_options(*o),
-                       shell_word(diagnosis.recommended.text()));
+            fmt::print("\nnext: mhbench fit --data {}{} --model {}{}\n", shell_word(o->data), data_reading_options(*o),
+                       shell_word(diagnosis.recommended.text()),
+                       o->control_period > 0.0 ? fmt::format(" --control-period {:g}", o->control_period) : std::string());
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;

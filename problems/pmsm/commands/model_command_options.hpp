@@ -19,6 +19,7 @@
 #include "problems/pmsm/data/operating_points.hpp"
 #include "problems/pmsm/data/settled_measurement.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::cli {
 
@@ -31,6 +32,7 @@ struct ModelCommandOptions {
     std::string columns, columns_file;
     int pole_pairs = 0;
     double settle = 0.0;
+    double control_period = 0.0;
     std::int64_t evaluations = 0;
     std::uint64_t seed = 1;
     std::int64_t search_rows = pmsm::FitOptions{}.search_rows;
@@ -72,7 +74,25 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
                     "steady (di/dt = 0, the default), dynamic (one-step-ahead current prediction on a raw log sampled without gaps) "
                     "or auto (dynamic when the log holds transients its sampling resolves; says which and why)")
         ->check(CLI::IsMember({"steady", "dynamic", "auto"}));
+    cmd->add_option("--control-period", o.control_period,
+                    "the drive's control period in seconds (currents sampled, voltage updated and held once a period): the base "
+                    "parameters are also given corrected for its sample and hold (docs/diagnosis.md); steady-state model only")
+        ->check(number_in(0.0, 1.0));
     cmd->add_option("--json", o.json, json_help);
+}
+
+// The sample and hold of --control-period on the steady-state fit `fit` of `data`; none without the option.
+inline std::optional<pmsm::SampleAndHold> sample_and_hold_option(const ModelCommandOptions& o, const pmsm::Measurement& data,
+                                                                 const pmsm::ModelFit& fit) {
+    if (!(o.control_period > 0.0)) return std::nullopt;
+    return pmsm::SampleAndHold{o.control_period, pmsm::sample_and_hold_bias(data, fit.values.head<4>(), o.control_period)};
+}
+
+// --control-period corrects the steady-state model; the dynamic model is refused with it.
+inline void check_control_period_option(const ModelCommandOptions& o) {
+    if (o.control_period > 0.0)
+        throw InputError("command line", 0, "--control-period",
+                         "the sample-and-hold correction is for the steady-state model; leave --control-period out with --model-kind dynamic");
 }
 
 // The fit settings of the options.

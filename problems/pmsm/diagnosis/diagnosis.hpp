@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
 
@@ -36,6 +37,9 @@ struct DiagnosisOptions {
     // The machine's pole pairs (0: not known), which tell a harmonic at a mechanical order k/p of the
     // electrical frequency from an electrical one (docs/diagnosis.md, "Harmonics at mechanical orders").
     int pole_pairs = 0;
+    // The drive's control period (s; 0: not known): the recommended model's base parameters are also
+    // given corrected for its sample and hold (model/sample_and_hold.hpp).
+    double control_period = 0.0;
 };
 
 // The noise of the data (noise.hpp, window_noise): per axis the standard deviation of the diagnosed
@@ -343,10 +347,17 @@ struct Diagnosis {
     // What the recommended model's intervals do not hold although it leaves only noise; the findings
     // state each one.
     std::vector<IntervalCaveat> interval_caveats;
+    // With DiagnosisOptions::control_period: what its sample and hold does to the recommended model's base parameters.
+    std::optional<SampleAndHold> sample_and_hold;
 
     // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
     // only when nothing the data show is left out of it (an interval assumes the residual is noise).
     bool model_intervals_valid() const { return !missing_effect_found && !not_in_library; }
+    // The fit of the recommended model: the search's step that made it, else the model diagnosed.
+    const ModelFit& recommended_fit() const {
+        const bool from_path = !path.empty() && path[recommended_step].fit.spec.text() == recommended.text();
+        return from_path ? path[recommended_step].fit : model;
+    }
     bool recommended_intervals_valid() const { return !incomplete && !not_in_library && tie.empty() && !law_error_beyond_noise; }
     // Whether the recommended model's interval of base parameter `j` (Rs, Ld, Lq, psi_f) comes with
     // a mark: not valid, or a caveat that concerns it. An interval without one owes the truth.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/diagnosis/verdict.hpp"
@@ -303,6 +304,21 @@ void data_findings(const Diagnosis& d, std::vector<std::string>& f) {
                                     unit_of(drift.variable)));
 }
 
+// The stated control period's sample and hold on the recommended model's base parameters.
+std::string sample_and_hold_finding(const Diagnosis& d) {
+    const ModelFit& recommended = d.recommended_fit();
+    const SampleAndHold& held = *d.sample_and_hold;
+    std::vector<std::string> corrected;
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const double value = recommended.values[j] - held.bias[j];
+        corrected.push_back(fmt::format("{} {:.6g} ({:+.3g} %)", recommended.names[static_cast<std::size_t>(j)], value, -100.0 * held.bias[j] / value));
+    }
+    return fmt::format("The stated control period ({:g} µs) samples the currents once a period and holds the voltage computed from them over "
+                       "the next: the continuous model's base parameters read off the machine's by that, and corrected for it they are {} "
+                       "(`mhbench fit --control-period` gives the corrected intervals; docs/diagnosis.md).",
+                       1e6 * held.period, fmt::join(corrected, ", "));
+}
+
 }  // namespace
 
 std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_by_last_step, double floor_tolerance) {
@@ -333,6 +349,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     ? "; those of " + d.recommended.text() + " hold as far as this log can tell"
                                     : std::string()));
     for (const auto& caveat : d.interval_caveats) f.push_back("Beyond the intervals of " + d.recommended.text() + ": " + caveat.reason + ".");
+    if (d.sample_and_hold) f.push_back(sample_and_hold_finding(d));
     data_findings(d, f);
     return f;
 }

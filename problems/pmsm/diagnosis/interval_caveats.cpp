@@ -25,8 +25,8 @@ const PathStep* reduced_step_of(const Diagnosis& d, const EffectTerm& term) {
 
 std::vector<IntervalCaveat> interval_caveats(const Measurement& data, const Diagnosis& d, const FitOptions& options) {
     std::vector<IntervalCaveat> out;
-    const bool from_path = !d.path.empty() && d.path[d.recommended_step].fit.spec.text() == d.recommended.text();
-    const ModelFit& recommended = from_path ? d.path[d.recommended_step].fit : d.model;
+    const bool from_path = &d.recommended_fit() != &d.model;
+    const ModelFit& recommended = d.recommended_fit();
     for (auto& bias : recommended.unseen_biases()) out.push_back({std::move(bias.text), bias.base});
     if (!from_path) return out;
 

@@ -74,6 +74,7 @@ json diagnosis_json(const Diagnosis& d) {
         caveats.push_back({{"reason", c.reason}, {"parameters", parameters}});
     }
     out["recommended_interval_caveats"] = caveats;
+    if (d.sample_and_hold) out["sample_and_hold"] = sample_and_hold_json(d.recommended_fit(), *d.sample_and_hold);
     json path = json::array();
     for (const auto& step : d.path) {
         path.push_back({{"model", step.fit.spec.text()},

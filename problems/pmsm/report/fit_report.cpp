@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace mhb::pmsm {
 
@@ -89,6 +90,43 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
             t += fmt::format("{:<28} {:>6} {:>11.4g} {:>11.4g} {:>11.4g}\n", s.label, s.rows, s.rms.d, s.rms.q, s.rms.total);
     }
     return t;
+}
+
+std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held) {
+    std::vector<std::string> shifts;
+    for (Eigen::Index j = 0; j < 4; ++j)
+        shifts.push_back(fmt::format("{} {:+.3g} %", fit.names[static_cast<std::size_t>(j)], 100.0 * held.bias[j] / (fit.values[j] - held.bias[j])));
+    std::string t = fmt::format(
+        "\nsample and hold of the stated control period ({:g} µs): a drive that samples the currents once a period and holds the voltage it "
+        "computes over the next makes the continuous model read {} above the machine (docs/diagnosis.md); corrected:\n",
+        1e6 * held.period, fmt::join(shifts, ", "));
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const auto k = static_cast<std::size_t>(j);
+        const std::string interval = !fit.free[k] ? "fixed"
+                                     : std::isfinite(fit.lower[j])
+                                         ? fmt::format("[{:.6g}, {:.6g}]", fit.lower[j] - held.bias[j], fit.upper[j] - held.bias[j])
+                                         : "not determined by the data";
+        t += fmt::format("{:<28} {:>14} {:>36}  {}\n", fit.names[k], value_text(fit.values[j] - held.bias[j]), interval, fit.units[k]);
+    }
+    return t;
+}
+
+json sample_and_hold_json(const ModelFit& fit, const SampleAndHold& held) {
+    json out;
+    out["control_period"] = held.period;
+    json bias = json::object(), corrected = json::object();
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const auto& name = fit.names[static_cast<std::size_t>(j)];
+        const double value = fit.values[j] - held.bias[j];
+        bias[name] = held.bias[j] / value;
+        corrected[name] = {{"value", value},
+                           {"ci95", fit.free[static_cast<std::size_t>(j)] && std::isfinite(fit.lower[j])
+                                        ? json::array({fit.lower[j] - held.bias[j], fit.upper[j] - held.bias[j]})
+                                        : json(nullptr)}};
+    }
+    out["bias"] = bias;
+    out["corrected"] = corrected;
+    return out;
 }
 
 }  // namespace mhb::pmsm

@@ -8,6 +8,7 @@
 
 #include "problems/pmsm/data/measurement.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
 
@@ -16,6 +17,12 @@ namespace mhb::pmsm {
 // data do not determine are null.
 nlohmann::ordered_json fit_json(const ModelFit& fit);
 std::string fit_text(const ModelFit& fit, const Measurement& data);
+
+// The base parameters of `fit` corrected for a stated control period's sample and hold: a paragraph
+// giving the bias and the corrected values with their intervals (each moved by the bias), and
+// {"control_period", "bias": {name: relative}, "corrected": {name: {"value", "ci95"}}}.
+std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held);
+nlohmann::ordered_json sample_and_hold_json(const ModelFit& fit, const SampleAndHold& held);
 
 // The fields fit_json is made of.
 nlohmann::ordered_json finite_or_null(double v);
