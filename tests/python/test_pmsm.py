@@ -81,6 +81,30 @@ def test_diagnose_offers_a_law_with_fewer_terms_unless_whole_laws():
     assert mhbench.pmsm.diagnose(drive.data, whole_laws=True).recommended == "base"
 
 
+def test_fit_corrects_for_a_stated_control_period():
+    # The device servo without noise, its carrier at 40 kHz (whose own bias is then below 0.01 %):
+    # the sample and hold of its 100 us control period makes Ld and Lq read 0.4 and 0.7 % high.
+    import tomllib
+    with open(PROFILE.parent / "device_diagnosis_profile.toml", "rb") as f:
+        profile = tomllib.load(f)
+    profile["noise"] = {"current": 0.0, "speed": 0.0, "temperature": 0.0}
+    profile["plant"]["inverter"]["pwm_frequency"] = 40e3
+    profile["drive"]["integration_step"] = 2.5e-6
+    drive = mhbench.pmsm.simulate(profile, seed=1)
+    truth = drive.truth["true_parameters"]
+    result = mhbench.pmsm.fit(drive.data, control_period=100e-6)
+    held = result.report["sample_and_hold"]
+    assert held["control_period"] == 100e-6
+    for name in ("Ld", "Lq"):
+        before = abs(result.parameters[name] / truth[name] - 1)
+        after = abs(held["corrected"][name]["value"] / truth[name] - 1)
+        assert before > 3e-3 and after < 2e-4, (name, before, after)
+    assert "sample and hold of the stated control period (100 µs)" in result.text
+    assert "sample_and_hold" not in mhbench.pmsm.fit(drive.data).report
+    diagnosis = mhbench.pmsm.diagnose(drive.data, control_period=100e-6)
+    assert diagnosis.report["sample_and_hold"]["control_period"] == 100e-6
+
+
 def test_simulate_with_effects_and_seed(simulated, tmp_path):
     _, clean = simulated
     result = mhbench.pmsm.simulate(PROFILE, effects={"deadtime": {}}, seed=7, out=tmp_path / "d.csv")

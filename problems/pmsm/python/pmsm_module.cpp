@@ -148,7 +148,8 @@ py::dict fit_result(const Measurement& data, const ModelFit& fit) {
 }
 
 py::dict fit(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations, py::handle seed,
-             double settle, py::handle search_rows, py::handle columns, int pole_pairs, py::handle threads) {
+             double settle, py::handle search_rows, py::handle columns, int pole_pairs, py::handle threads, double control_period) {
+    if (!(control_period >= 0.0 && control_period <= 1.0)) throw py::value_error("control_period: must lie in [0, 1] s");
     const auto spec = parse_model_spec(model);
     const auto options = fit_options_of(optimizer, evaluations, seed, search_rows);
     auto measurement = measurement_of(data, settle, columns, pole_pairs);
@@ -160,19 +161,24 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
         result = fit_model(measurement, spec, options);
     }
     py::dict out = fit_result(measurement, result);
-    // As `mhbench fit --json` writes it.
-    if (found) {
-        py::dict written = out["report"];
-        written["operating_points"] = json_object(operating_points_json(*found));
+    // As `mhbench fit --json` writes it and prints it.
+    py::dict written = out["report"];
+    if (control_period > 0.0) {
+        const SampleAndHold held{control_period, sample_and_hold_bias(measurement, result.values.head<4>(), control_period)};
+        written["sample_and_hold"] = json_object(sample_and_hold_json(result, held));
+        out["text"] = py::str(fit_text(result, measurement) + sample_and_hold_text(result, held));
     }
+    if (found) written["operating_points"] = json_object(operating_points_json(*found));
     return out;
 }
 
 py::dict diagnose(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations,
                   py::handle seed, double settle, py::handle search_rows, py::handle columns, int pole_pairs,
-                  py::handle threads, py::handle report, bool whole_laws) {
+                  py::handle threads, py::handle report, bool whole_laws, double control_period) {
+    if (!(control_period >= 0.0 && control_period <= 1.0)) throw py::value_error("control_period: must lie in [0, 1] s");
     const auto spec = parse_model_spec(model);
     DiagnosisOptions options;
+    options.control_period = control_period;
     options.fit = fit_options_of(optimizer, evaluations, seed, search_rows);
     options.pole_pairs = pole_pairs;
     options.reduced_laws = !whole_laws;
@@ -262,10 +268,10 @@ py::dict simulate(py::handle profile, py::handle base_directory, py::handle seed
 void bind_pmsm(py::module_& m) {
     m.doc() = "PMSM model identification: fit, diagnose, simulate (use mhbench.pmsm)";
     m.def("fit", &fit, py::arg("data"), py::arg("model"), py::arg("optimizer"), py::arg("evaluations"), py::arg("seed"),
-          py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"), py::arg("threads"));
+          py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"), py::arg("threads"), py::arg("control_period"));
     m.def("diagnose", &diagnose, py::arg("data"), py::arg("model"), py::arg("optimizer"), py::arg("evaluations"),
           py::arg("seed"), py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"),
-          py::arg("threads"), py::arg("report"), py::arg("whole_laws"));
+          py::arg("threads"), py::arg("report"), py::arg("whole_laws"), py::arg("control_period"));
     m.def("simulate", &simulate, py::arg("profile"), py::arg("base_directory"), py::arg("seed"), py::arg("out"));
 }
 
