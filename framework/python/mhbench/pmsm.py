@@ -89,28 +89,30 @@ def _fit_result(record: dict) -> FitResult:
 
 def fit(data, model: str = "base", *, optimizer: str = "cmaes", evaluations: int = 0, seed: int = 1,
         settle: float = 0.0, search_rows: Optional[int] = None, columns: Optional[dict] = None, pole_pairs: int = 0,
-        threads: Optional[int] = None, control_period: float = 0.0) -> FitResult:
+        threads: Optional[int] = None, control_period: float = 0.0, carrier_frequency: float = 0.0,
+        dc_voltage: float = 0.0) -> FitResult:
     """Fits a model (base + effects, e.g. "base+deadtime+delay(tau=150e-6)") to data, as `mhbench fit` does
     with the same options: the same data and settings give the same parameters to the last bit.
     optimizer, evaluations (0: 150 + 50 per searched parameter) and seed drive the search of the effects'
     nonlinear parameters; settle drops that many seconds after each segment start; search_rows bounds the
     rows the search uses; threads caps the worker threads (results do not depend on it); control_period (s),
     as `--control-period`, adds report["sample_and_hold"]: the base parameters corrected for the drive's sample
-    and hold (docs/diagnosis.md)."""
+    and hold, with carrier_frequency (Hz) and dc_voltage (V) its carrier's ripple too (docs/diagnosis.md)."""
     return _fit_result(_bindings.fit(data, model, optimizer, evaluations, seed, settle, search_rows, columns,
-                                     pole_pairs, threads, control_period))
+                                     pole_pairs, threads, control_period, carrier_frequency, dc_voltage))
 
 
 def diagnose(data, model: str = "base", *, optimizer: str = "cmaes", evaluations: int = 0, seed: int = 1,
              settle: float = 0.0, search_rows: Optional[int] = None, columns: Optional[dict] = None,
              pole_pairs: int = 0, threads: Optional[int] = None, report=None,
-             whole_laws: bool = False, control_period: float = 0.0) -> DiagnosisResult:
+             whole_laws: bool = False, control_period: float = 0.0, carrier_frequency: float = 0.0,
+             dc_voltage: float = 0.0) -> DiagnosisResult:
     """Diagnoses a model against data, as `mhbench diagnose` does: where it fails, which library effect is
     most likely missing and how sure, and the model to fit next. report: a directory to write report.md,
     the plots and report.html into. whole_laws: add a law of several terms (saturation) only whole, as
     `--whole-laws` does (docs/diagnosis.md, section 1). Options as for fit."""
     record = _bindings.diagnose(data, model, optimizer, evaluations, seed, settle, search_rows, columns, pole_pairs,
-                                threads, report, whole_laws, control_period)
+                                threads, report, whole_laws, control_period, carrier_frequency, dc_voltage)
     return DiagnosisResult(model=record["model"], recommended=record["recommended"],
                            findings=list(record["report"].get("findings", [])), report=record["report"],
                            text=record["text"], report_html=record.get("report_html"))

@@ -35,6 +35,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
+        check_timing_options(*o, false);
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
@@ -59,13 +60,13 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         options.fit = fit_options(*o);
         options.pole_pairs = columns.pole_pairs.value_or(0);
         options.reduced_laws = !o->whole_laws;
-        options.control_period = o->control_period;
+        options.timing = o->timing;
         const auto diagnosis = pmsm::diagnose(data, spec, options);
         fmt::print("{}", pmsm::diagnosis_text(diagnosis));
         if (diagnosis.recommended.text() != spec.text())
             fmt::print("\nnext: mhbench fit --data {}{} --model {}{}\n", shell_word(o->data), data_reading_options(*o),
                        shell_word(diagnosis.recommended.text()),
-                       o->control_period > 0.0 ? fmt::format(" --control-period {:g}", o->control_period) : std::string());
+                       timing_options_text(*o));
         if (!o->json.empty()) {
             auto out = pmsm::diagnosis_json(diagnosis);
             out["data"] = o->data;

@@ -25,6 +25,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
     return std::function<int()>([o] {
         const auto spec = pmsm::parse_model_spec(o->model);
         check_optimizer_option(o->optimizer);
+        check_timing_options(*o, false);
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
@@ -35,7 +36,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
             kind = choice.kind;
         }
         if (kind == pmsm::ModelKind::Dynamic) {
-            check_control_period_option(*o);
+            check_timing_options(*o, true);
             // Every row: the transients are what the dynamic model learns from, and rows dropped by
             // --settle would leave gaps whose row numbers are not the file's.
             if (o->settle > 0.0)

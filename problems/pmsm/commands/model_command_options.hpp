@@ -7,6 +7,7 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
@@ -32,7 +33,7 @@ struct ModelCommandOptions {
     std::string columns, columns_file;
     int pole_pairs = 0;
     double settle = 0.0;
-    double control_period = 0.0;
+    pmsm::DriveTiming timing;
     std::int64_t evaluations = 0;
     std::uint64_t seed = 1;
     std::int64_t search_rows = pmsm::FitOptions{}.search_rows;
@@ -74,25 +75,45 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
                     "steady (di/dt = 0, the default), dynamic (one-step-ahead current prediction on a raw log sampled without gaps) "
                     "or auto (dynamic when the log holds transients its sampling resolves; says which and why)")
         ->check(CLI::IsMember({"steady", "dynamic", "auto"}));
-    cmd->add_option("--control-period", o.control_period,
+    cmd->add_option("--control-period", o.timing.control_period,
                     "the drive's control period in seconds (currents sampled, voltage updated and held once a period): the base "
                     "parameters are also given corrected for its sample and hold (docs/diagnosis.md); steady-state model only")
         ->check(number_in(0.0, 1.0));
+    cmd->add_option("--carrier-frequency", o.timing.carrier_frequency,
+                    "with --control-period and --dc-voltage: the PWM carrier (Hz, centred, currents sampled at its peak), whose current "
+                    "ripple the correction then includes")
+        ->check(number_in(0.0, 1e7));
+    cmd->add_option("--dc-voltage", o.timing.dc_voltage, "with --carrier-frequency: the inverter's DC link voltage (V)")->check(number_in(0.0, 1e6));
     cmd->add_option("--json", o.json, json_help);
 }
 
 // The sample and hold of --control-period on the steady-state fit `fit` of `data`; none without the option.
 inline std::optional<pmsm::SampleAndHold> sample_and_hold_option(const ModelCommandOptions& o, const pmsm::Measurement& data,
                                                                  const pmsm::ModelFit& fit) {
-    if (!(o.control_period > 0.0)) return std::nullopt;
-    return pmsm::SampleAndHold{o.control_period, pmsm::sample_and_hold_bias(data, fit.values.head<4>(), o.control_period)};
+    if (!(o.timing.control_period > 0.0)) return std::nullopt;
+    return pmsm::SampleAndHold{o.timing, pmsm::sample_and_hold_bias(data, fit.values.head<4>(), o.timing)};
 }
 
-// --control-period corrects the steady-state model; the dynamic model is refused with it.
-inline void check_control_period_option(const ModelCommandOptions& o) {
-    if (o.control_period > 0.0)
+// " --control-period T [--carrier-frequency F --dc-voltage V]" as given, for the commands suggested next.
+inline std::string timing_options_text(const ModelCommandOptions& o) {
+    if (!(o.timing.control_period > 0.0)) return {};
+    std::string out = fmt::format(" --control-period {:g}", o.timing.control_period);
+    if (o.timing.carrier()) out += fmt::format(" --carrier-frequency {:g} --dc-voltage {:g}", o.timing.carrier_frequency, o.timing.dc_voltage);
+    return out;
+}
+
+// --control-period with --carrier-frequency and --dc-voltage, checked before any data is read;
+// `dynamic`: the dynamic model, which the correction is not for.
+inline void check_timing_options(const ModelCommandOptions& o, bool dynamic) {
+    const auto& t = o.timing;
+    if (t.control_period > 0.0 && dynamic)
         throw InputError("command line", 0, "--control-period",
                          "the sample-and-hold correction is for the steady-state model; leave --control-period out with --model-kind dynamic");
+    if (!(t.control_period > 0.0) && (t.carrier() || t.dc_voltage > 0.0))
+        throw InputError("command line", 0, t.carrier() ? "--carrier-frequency" : "--dc-voltage", "needs --control-period as well");
+    if (t.control_period > 0.0)
+        if (const auto problem = pmsm::timing_problem(t); !problem.empty())
+            throw InputError("command line", 0, problem.rfind("dc voltage", 0) == 0 ? "--dc-voltage" : "--carrier-frequency", problem);
 }
 
 // The fit settings of the options.

@@ -83,8 +83,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     for (const auto& h : trace.left[r.step].mechanical_harmonics)
         if (h.significant) out.mechanical_left.push_back(h);
     out.interval_caveats = interval_caveats(data, out, options.fit);
-    if (options.control_period > 0.0)
-        out.sample_and_hold = SampleAndHold{options.control_period, sample_and_hold_bias(data, out.recommended_fit().values.head<4>(), options.control_period)};
+    if (options.timing.control_period > 0.0)
+        out.sample_and_hold = SampleAndHold{options.timing, sample_and_hold_bias(data, out.recommended_fit().values.head<4>(), options.timing)};
     out.findings = findings_of(out, trace.left[r.step], options.floor_tolerance);
     return out;
 }

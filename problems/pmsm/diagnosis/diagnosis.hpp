@@ -37,9 +37,9 @@ struct DiagnosisOptions {
     // The machine's pole pairs (0: not known), which tell a harmonic at a mechanical order k/p of the
     // electrical frequency from an electrical one (docs/diagnosis.md, "Harmonics at mechanical orders").
     int pole_pairs = 0;
-    // The drive's control period (s; 0: not known): the recommended model's base parameters are also
-    // given corrected for its sample and hold (model/sample_and_hold.hpp).
-    double control_period = 0.0;
+    // The drive's control period (0: not known), and its carrier: the recommended model's base
+    // parameters are also given corrected for its sample and hold (model/sample_and_hold.hpp).
+    DriveTiming timing;
 };
 
 // The noise of the data (noise.hpp, window_noise): per axis the standard deviation of the diagnosed

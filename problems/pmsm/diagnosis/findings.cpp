@@ -313,10 +313,10 @@ std::string sample_and_hold_finding(const Diagnosis& d) {
         const double value = recommended.values[j] - held.bias[j];
         corrected.push_back(fmt::format("{} {:.6g} ({:+.3g} %)", recommended.names[static_cast<std::size_t>(j)], value, -100.0 * held.bias[j] / value));
     }
-    return fmt::format("The stated control period ({:g} µs) samples the currents once a period and holds the voltage computed from them over "
-                       "the next: the continuous model's base parameters read off the machine's by that, and corrected for it they are {} "
+    return fmt::format("The stated control period ({}) samples the currents once a period and holds the voltage computed from them over "
+                       "the next{}: the continuous model's base parameters read off the machine's by that, and corrected for it they are {} "
                        "(`mhbench fit --control-period` gives the corrected intervals; docs/diagnosis.md).",
-                       1e6 * held.period, fmt::join(corrected, ", "));
+                       timing_text(held.timing), held.timing.carrier() ? ", switched by the carrier" : "", fmt::join(corrected, ", "));
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 // affinely in the base parameters. So the bias is computed after the fit, from the base values, for a
 // control period the user states.
 #include <complex>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -22,16 +23,40 @@ namespace mhb::pmsm {
 // in the stator frame; the continuous model's (Rs + j omega L) i + j omega psi_f as the period goes to 0.
 std::complex<double> held_voltage(const Eigen::Vector4d& base, double omega, std::complex<double> current, double period);
 
-// What a stated control period does to a fit's base parameters.
+// What the user states of the drive's timing: the control period alone, or with the carrier too.
+struct DriveTiming {
+    double control_period = 0.0;     // s: currents sampled and the voltage updated once a period
+    double carrier_frequency = 0.0;  // Hz, a whole number of carrier periods per control period (0: not stated)
+    double dc_voltage = 0.0;         // V, the DC link (with the carrier)
+    bool carrier() const { return carrier_frequency > 0.0; }
+};
+
+// What a stated timing does to a fit's base parameters.
 struct SampleAndHold {
-    double period = 0.0;                           // s, as the user stated it
+    DriveTiming timing;
     Eigen::Vector4d bias = Eigen::Vector4d::Zero();  // fitted - machine's, in the parameters' units
 };
 
+// Why `timing` cannot describe a drive (a field and the reason), or empty.
+std::string timing_problem(const DriveTiming& timing);
+// "100 µs" or "100 µs, carrier 10 kHz from 28 V".
+std::string timing_text(const DriveTiming& timing);
+
+// The same with the inverter's legs switched by a centred carrier of `timing.carrier_frequency` from
+// `timing.dc_voltage`, the duties from the phase references with the min-max zero sequence, and the
+// currents sampled at the carrier's peak, where every leg is low: besides the hold, the current ripple
+// whose mean under the resistance is not its sample. The pattern depends on where the voltage vector
+// lies among the inverter's six sectors, so on the rotor's electrical `angle` at the sample (the
+// logged theta_e); the rotor is taken as turning by omega T per period at that angle, the operating
+// point as steady. Solved for the reference by Newton's method from held_voltage's.
+std::complex<double> switched_voltage(const Eigen::Vector4d& base, double omega, std::complex<double> current, double angle,
+                                      const DriveTiming& timing);
+
 // How much a least-squares fit of the base model reads each base parameter above the machine's
 // (fitted - true, in the parameters' units) on the operating points of `data` when its voltages are
-// held over `period`, for a machine near `base`. One fixed-point step from the fitted values (the
-// bias at the corrected values), on at most `max_rows` rows evenly spaced through the log.
-Eigen::Vector4d sample_and_hold_bias(const Measurement& data, const Eigen::Vector4d& base, double period, Eigen::Index max_rows = 20000);
+// held over the control period (switched, when the carrier is stated), for a machine near `base`. One
+// fixed-point step from the fitted values (the bias at the corrected values), on at most 20 000 rows
+// evenly spaced through the log (500 with the carrier, whose solution costs a hundred times more).
+Eigen::Vector4d sample_and_hold_bias(const Measurement& data, const Eigen::Vector4d& base, const DriveTiming& timing);
 
 }  // namespace mhb::pmsm

@@ -147,9 +147,21 @@ py::dict fit_result(const Measurement& data, const ModelFit& fit) {
     return out;
 }
 
-py::dict fit(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations, py::handle seed,
-             double settle, py::handle search_rows, py::handle columns, int pole_pairs, py::handle threads, double control_period) {
+// The drive's timing as `control_period`, `carrier_frequency` and `dc_voltage` state it (0: not stated).
+DriveTiming timing_of(double control_period, double carrier_frequency, double dc_voltage) {
     if (!(control_period >= 0.0 && control_period <= 1.0)) throw py::value_error("control_period: must lie in [0, 1] s");
+    const DriveTiming timing{control_period, carrier_frequency, dc_voltage};
+    if (control_period == 0.0 && (carrier_frequency != 0.0 || dc_voltage != 0.0))
+        throw py::value_error("carrier_frequency, dc_voltage: need control_period as well");
+    if (control_period > 0.0)
+        if (const auto problem = timing_problem(timing); !problem.empty()) throw py::value_error(problem);
+    return timing;
+}
+
+py::dict fit(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations, py::handle seed,
+             double settle, py::handle search_rows, py::handle columns, int pole_pairs, py::handle threads, double control_period,
+             double carrier_frequency, double dc_voltage) {
+    const DriveTiming timing = timing_of(control_period, carrier_frequency, dc_voltage);
     const auto spec = parse_model_spec(model);
     const auto options = fit_options_of(optimizer, evaluations, seed, search_rows);
     auto measurement = measurement_of(data, settle, columns, pole_pairs);
@@ -163,8 +175,8 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
     py::dict out = fit_result(measurement, result);
     // As `mhbench fit --json` writes it and prints it.
     py::dict written = out["report"];
-    if (control_period > 0.0) {
-        const SampleAndHold held{control_period, sample_and_hold_bias(measurement, result.values.head<4>(), control_period)};
+    if (timing.control_period > 0.0) {
+        const SampleAndHold held{timing, sample_and_hold_bias(measurement, result.values.head<4>(), timing)};
         written["sample_and_hold"] = json_object(sample_and_hold_json(result, held));
         out["text"] = py::str(fit_text(result, measurement) + sample_and_hold_text(result, held));
     }
@@ -174,11 +186,11 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
 
 py::dict diagnose(py::handle data, const std::string& model, const std::string& optimizer, py::handle evaluations,
                   py::handle seed, double settle, py::handle search_rows, py::handle columns, int pole_pairs,
-                  py::handle threads, py::handle report, bool whole_laws, double control_period) {
-    if (!(control_period >= 0.0 && control_period <= 1.0)) throw py::value_error("control_period: must lie in [0, 1] s");
+                  py::handle threads, py::handle report, bool whole_laws, double control_period, double carrier_frequency,
+                  double dc_voltage) {
     const auto spec = parse_model_spec(model);
     DiagnosisOptions options;
-    options.control_period = control_period;
+    options.timing = timing_of(control_period, carrier_frequency, dc_voltage);
     options.fit = fit_options_of(optimizer, evaluations, seed, search_rows);
     options.pole_pairs = pole_pairs;
     options.reduced_laws = !whole_laws;
@@ -268,10 +280,12 @@ py::dict simulate(py::handle profile, py::handle base_directory, py::handle seed
 void bind_pmsm(py::module_& m) {
     m.doc() = "PMSM model identification: fit, diagnose, simulate (use mhbench.pmsm)";
     m.def("fit", &fit, py::arg("data"), py::arg("model"), py::arg("optimizer"), py::arg("evaluations"), py::arg("seed"),
-          py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"), py::arg("threads"), py::arg("control_period"));
+          py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"), py::arg("threads"), py::arg("control_period"),
+          py::arg("carrier_frequency"), py::arg("dc_voltage"));
     m.def("diagnose", &diagnose, py::arg("data"), py::arg("model"), py::arg("optimizer"), py::arg("evaluations"),
           py::arg("seed"), py::arg("settle"), py::arg("search_rows"), py::arg("columns"), py::arg("pole_pairs"),
-          py::arg("threads"), py::arg("report"), py::arg("whole_laws"), py::arg("control_period"));
+          py::arg("threads"), py::arg("report"), py::arg("whole_laws"), py::arg("control_period"),
+          py::arg("carrier_frequency"), py::arg("dc_voltage"));
     m.def("simulate", &simulate, py::arg("profile"), py::arg("base_directory"), py::arg("seed"), py::arg("out"));
 }
 

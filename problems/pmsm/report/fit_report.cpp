@@ -97,9 +97,9 @@ std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held)
     for (Eigen::Index j = 0; j < 4; ++j)
         shifts.push_back(fmt::format("{} {:+.3g} %", fit.names[static_cast<std::size_t>(j)], 100.0 * held.bias[j] / (fit.values[j] - held.bias[j])));
     std::string t = fmt::format(
-        "\nsample and hold of the stated control period ({:g} µs): a drive that samples the currents once a period and holds the voltage it "
-        "computes over the next makes the continuous model read {} above the machine (docs/diagnosis.md); corrected:\n",
-        1e6 * held.period, fmt::join(shifts, ", "));
+        "\nsample and hold of the stated control period ({}): a drive that samples the currents once a period and holds the voltage it "
+        "computes over the next{} makes the continuous model read {} above the machine (docs/diagnosis.md); corrected:\n",
+        timing_text(held.timing), held.timing.carrier() ? ", switching it by the carrier," : "", fmt::join(shifts, ", "));
     for (Eigen::Index j = 0; j < 4; ++j) {
         const auto k = static_cast<std::size_t>(j);
         const std::string interval = !fit.free[k] ? "fixed"
@@ -113,7 +113,11 @@ std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held)
 
 json sample_and_hold_json(const ModelFit& fit, const SampleAndHold& held) {
     json out;
-    out["control_period"] = held.period;
+    out["control_period"] = held.timing.control_period;
+    if (held.timing.carrier()) {
+        out["carrier_frequency"] = held.timing.carrier_frequency;
+        out["dc_voltage"] = held.timing.dc_voltage;
+    }
     json bias = json::object(), corrected = json::object();
     for (Eigen::Index j = 0; j < 4; ++j) {
         const auto& name = fit.names[static_cast<std::size_t>(j)];

@@ -20,7 +20,7 @@ std::string fit_text(const ModelFit& fit, const Measurement& data);
 
 // The base parameters of `fit` corrected for a stated control period's sample and hold: a paragraph
 // giving the bias and the corrected values with their intervals (each moved by the bias), and
-// {"control_period", "bias": {name: relative}, "corrected": {name: {"value", "ci95"}}}.
+// {"control_period", "carrier_frequency", "dc_voltage" (with the carrier), "bias": {name: relative}, "corrected": {name: {"value", "ci95"}}}.
 std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held);
 nlohmann::ordered_json sample_and_hold_json(const ModelFit& fit, const SampleAndHold& held);
 
