@@ -178,7 +178,7 @@ TEST_CASE("with the carrier stated the correction takes in its current ripple to
     CHECK(switched.cwiseAbs().maxCoeff() < 2e-4);
 }
 
-TEST_CASE("fit and diagnose --control-period give the corrected base parameters; the dynamic model refuses it", "[pmsm][sample_and_hold][cli]") {
+TEST_CASE("fit and diagnose --control-period give the corrected base parameters, and the dynamic model refuses it", "[pmsm][sample_and_hold][cli]") {
     mhb::testing::TemporaryDirectory dir;
     const auto csv = dir.path() / "held.csv";
     const Drive d = noise_free_drive("device_diagnosis_profile.toml", 100e-6, 40e3, 2.5e-6);
