@@ -598,6 +598,10 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         // Whoever logs a drive knows its pole pairs: the diagnosis tests the mechanical orders with them.
         DiagnosisOptions drive_options = options;
         drive_options.pole_pairs = sim.motor.pole_pairs;
+        // And the device plant's control period and carrier: it holds each voltage over a period and
+        // switches it by the carrier, as a digital drive does (the averaged plant applies its voltage
+        // continuously).
+        if (sim.device) drive_options.timing = DriveTiming{sim.control.control_period, sim.device->inverter.pwm_frequency, sim.control.dc_voltage};
         const Diagnosis d = diagnose(result.data, model, drive_options);
         r.recommended = d.recommended.text();
         for (const auto& e : d.recommended.effects)
@@ -647,7 +651,10 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
                 r.structure_left = step.structure;
             }
         const Eigen::Vector4d truth(sim.motor.rs, sim.motor.ld, sim.motor.lq, sim.motor.psi_f);
-        r.base_error = (fit->values.head<4>() - truth).cwiseQuotient(truth);
+        // Corrected for the control period's sample and hold where the diagnosis was told it.
+        const Eigen::Vector4d held = d.sample_and_hold ? d.sample_and_hold->bias : Eigen::Vector4d::Zero();
+        if (d.sample_and_hold) r.sample_and_hold_bias = held.cwiseQuotient(truth);
+        r.base_error = (fit->values.head<4>() - held - truth).cwiseQuotient(truth);
         // The search compares its sets without intervals; the recommended one gets them here, polished
         // from where the search left it.
         FitOptions with_intervals = options.fit;
@@ -656,7 +663,7 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         const ModelFit interval_fit = polish_model(result.data, fit->spec, fit->values, with_intervals);
         for (int j = 0; j < 4; ++j)
             if (std::isfinite(interval_fit.lower[j]) && std::isfinite(interval_fit.upper[j]))
-                r.covered[static_cast<std::size_t>(j)] = interval_fit.lower[j] <= truth[j] && truth[j] <= interval_fit.upper[j] ? 1 : 0;
+                r.covered[static_cast<std::size_t>(j)] = interval_fit.lower[j] - held[j] <= truth[j] && truth[j] <= interval_fit.upper[j] - held[j] ? 1 : 0;
         r.flux_error = flux_error_of(sim, result.data, *fit);
         r.rms = d.model.rms.total;
         r.rms_recommended = fit->rms.total;
@@ -819,11 +826,17 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                   "saying \"not in the library\" and, when the study file names the mechanical order it leaves, naming that order). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
                                   "true| / true of the recommended model's base parameters. Interval coverage: over the drives whose recommended model is "
                                   "correct, the share in which the 95 % interval of each base parameter (the recommended model polished with intervals) "
-                                  "holds the plant's value; at least 90 % is what a 95 % interval owes. \"Where no structure is left\": the same over the drives "
+                                  "holds the plant's value; at least 90 % is what a 95 % interval owes.{} \"Where no structure is left\": the same over the drives "
                                   "whose recommended model leaves no significant structure in the residual (segment means, angle harmonics). \"Correct or "
                                   "below the printed limit\": also counting a drive that added nothing false, did not say \"not in the library\" and missed only effects whose true size, as the "
                                   "study file states it (`clear_size`, `weak_size`), lies below the detection limit the diagnosis printed for them.",
-                                  spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size())});
+                                  spec.profile.filename().string(), spec.model, spec.seeds.size(), run.cases.size(), run.records.size(),
+                                  std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.sample_and_hold_bias.has_value(); })
+                                      ? " The device plant holds each voltage over a control period and switches it by a carrier, as a digital drive "
+                                        "does, and the diagnosis is told the period, the carrier frequency and the DC voltage as it is told the pole "
+                                        "pairs: errors and intervals are of the base parameters corrected for the sample and hold and the carrier's "
+                                        "ripple (`diagnose --control-period --carrier-frequency --dc-voltage`, docs/diagnosis.md)."
+                                      : "")});
     // Only where a case fits its sizes, so that the other studies' tables stay as they were.
     std::vector<std::string> fitted;
     for (const auto& e : spec.effects)
@@ -1042,6 +1055,9 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
             {"rms", r.rms},
             {"rms_recommended", r.rms_recommended},
             {"noise", r.noise}});
+    if (r.sample_and_hold_bias)
+        out["sample_and_hold_bias"] = {{"Rs", (*r.sample_and_hold_bias)[0]}, {"Ld", (*r.sample_and_hold_bias)[1]},
+                                       {"Lq", (*r.sample_and_hold_bias)[2]}, {"psi_f", (*r.sample_and_hold_bias)[3]}};
     // Only when some were named, so that the records of drives without a whole turn stay as they were.
     if (!r.mechanical_orders.empty()) out["mechanical_orders"] = r.mechanical_orders;
     // Only for the cases that fit them (StudyCase::pseudo_true_sized).

@@ -158,6 +158,9 @@ struct StudyRecord {
         return correct || (false_positives.empty() && !not_in_library && !missed.empty() && below_limit.size() == missed.size());
     }
     Eigen::Vector4d base_error = Eigen::Vector4d::Zero();  // (fitted - true) / true of Rs, Ld, Lq, psi_f, recommended model
+    // The control period's sample and hold on those (Diagnosis::sample_and_hold, relative to the true
+    // values), when the diagnosis was told the period; base_error and covered are then of the corrected values.
+    std::optional<Eigen::Vector4d> sample_and_hold_bias;
     // Whether the recommended model's 95 % interval of Rs, Ld, Lq, psi_f holds the true value: 1 yes,
     // 0 no, -1 no interval (the data do not determine it).
     std::array<int, 4> covered{-1, -1, -1, -1};
