@@ -176,6 +176,8 @@ TEST_CASE("with the carrier stated the correction takes in its current ripple to
     INFO("errors after the hold alone " << held.transpose() << ", with the carrier " << switched.transpose());
     CHECK(std::abs(held[3]) > 5e-4);
     CHECK(switched.cwiseAbs().maxCoeff() < 2e-4);
+    // No circuit without positive inductances: no correction, rather than a number.
+    CHECK(sample_and_hold_bias(d.data, Eigen::Vector4d{46.0, -0.02, 0.02, 0.04}, DriveTiming{100e-6}).array().isNaN().all());
 }
 
 TEST_CASE("fit and diagnose --control-period give the corrected base parameters, and the dynamic model refuses it", "[pmsm][sample_and_hold][cli]") {

@@ -308,6 +308,9 @@ void data_findings(const Diagnosis& d, std::vector<std::string>& f) {
 std::string sample_and_hold_finding(const Diagnosis& d) {
     const ModelFit& recommended = d.recommended_fit();
     const SampleAndHold& held = *d.sample_and_hold;
+    if (!held.bias.allFinite())
+        return fmt::format("The stated control period ({}) is not corrected for: the recommended model's Rs, Ld or Lq is not positive.",
+                           timing_text(held.timing));
     std::vector<std::string> corrected;
     for (Eigen::Index j = 0; j < 4; ++j) {
         const double value = recommended.values[j] - held.bias[j];

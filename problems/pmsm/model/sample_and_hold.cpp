@@ -179,6 +179,8 @@ Eigen::Vector4d refit_shift(const Measurement& data, const Eigen::Vector4d& base
 
 Eigen::Vector4d sample_and_hold_bias(const Measurement& data, const Eigen::Vector4d& base, const DriveTiming& timing) {
     if (!timing_problem(timing).empty() || data.size() == 0) return Eigen::Vector4d::Zero();
+    // The circuit needs a positive resistance and inductances; an implausible fit gets no correction.
+    if (!(base[0] > 0.0 && base[1] > 0.0 && base[2] > 0.0) || !base.allFinite()) return Eigen::Vector4d::Constant(std::nan(""));
     const Eigen::Index max_rows = timing.carrier() ? 500 : 20000;
     const Eigen::Index step = std::max<Eigen::Index>(1, (data.size() + max_rows - 1) / max_rows);
     // The fitted values are the machine's plus the bias; the bias is evaluated at the machine's.

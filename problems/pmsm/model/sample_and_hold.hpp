@@ -57,6 +57,7 @@ std::complex<double> switched_voltage(const Eigen::Vector4d& base, double omega,
 // held over the control period (switched, when the carrier is stated), for a machine near `base`. One
 // fixed-point step from the fitted values (the bias at the corrected values), on at most 20 000 rows
 // evenly spaced through the log (500 with the carrier, whose solution costs a hundred times more).
+// NaN when R_s, L_d or L_q of `base` is not positive (no circuit to solve).
 Eigen::Vector4d sample_and_hold_bias(const Measurement& data, const Eigen::Vector4d& base, const DriveTiming& timing);
 
 }  // namespace mhb::pmsm

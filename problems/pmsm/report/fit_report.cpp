@@ -93,6 +93,9 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
 }
 
 std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held) {
+    if (!held.bias.allFinite())
+        return fmt::format("\nsample and hold of the stated control period ({}): not corrected, the fitted Rs, Ld or Lq is not positive\n",
+                           timing_text(held.timing));
     std::vector<std::string> shifts;
     for (Eigen::Index j = 0; j < 4; ++j)
         shifts.push_back(fmt::format("{} {:+.3g} %", fit.names[static_cast<std::size_t>(j)], 100.0 * held.bias[j] / (fit.values[j] - held.bias[j])));

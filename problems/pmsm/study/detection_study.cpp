@@ -652,8 +652,9 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
             }
         const Eigen::Vector4d truth(sim.motor.rs, sim.motor.ld, sim.motor.lq, sim.motor.psi_f);
         // Corrected for the control period's sample and hold where the diagnosis was told it.
-        const Eigen::Vector4d held = d.sample_and_hold ? d.sample_and_hold->bias : Eigen::Vector4d::Zero();
-        if (d.sample_and_hold) r.sample_and_hold_bias = held.cwiseQuotient(truth);
+        const bool corrected = d.sample_and_hold && d.sample_and_hold->bias.allFinite();
+        const Eigen::Vector4d held = corrected ? d.sample_and_hold->bias : Eigen::Vector4d::Zero();
+        if (corrected) r.sample_and_hold_bias = held.cwiseQuotient(truth);
         r.base_error = (fit->values.head<4>() - held - truth).cwiseQuotient(truth);
         // The search compares its sets without intervals; the recommended one gets them here, polished
         // from where the search left it.
