@@ -144,6 +144,9 @@ std::complex<double> switched_voltage(const Eigen::Vector4d& base, double omega,
         jacobian.col(0) = (switched_end_flux(a, psi, u + h, omega, angle, timing) - psi - r) / h;
         jacobian.col(1) = (switched_end_flux(a, psi, u + std::complex<double>(0.0, h), omega, angle, timing) - psi - r) / h;
         const Eigen::Vector2d du = jacobian.partialPivLu().solve(-r);
+        // Legs clamped at a duty of 0 or 1 stop moving with the reference; where none moves, the held
+        // solution is as near as this gets.
+        if (!du.allFinite()) return held_voltage(base, omega, current, timing.control_period);
         u += std::complex<double>(du[0], du[1]);
         if (std::hypot(du[0], du[1]) < 1e-12 * scale) break;
     }
