@@ -109,11 +109,8 @@ inline void check_timing_options(const ModelCommandOptions& o, bool dynamic) {
     if (t.control_period > 0.0 && dynamic)
         throw InputError("command line", 0, "--control-period",
                          "the sample-and-hold correction is for the steady-state model; leave --control-period out with --model-kind dynamic");
-    if (!(t.control_period > 0.0) && (t.carrier() || t.dc_voltage > 0.0))
-        throw InputError("command line", 0, t.carrier() ? "--carrier-frequency" : "--dc-voltage", "needs --control-period as well");
-    if (t.control_period > 0.0)
-        if (const auto problem = pmsm::timing_problem(t); !problem.empty())
-            throw InputError("command line", 0, problem.rfind("dc voltage", 0) == 0 ? "--dc-voltage" : "--carrier-frequency", problem);
+    if (const auto problem = pmsm::timing_problem(t); !problem.empty())
+        throw InputError("command line", 0, problem.rfind("dc voltage", 0) == 0 ? "--dc-voltage" : "--carrier-frequency", problem);
 }
 
 // The fit settings of the options.

@@ -103,7 +103,10 @@ Eigen::Vector2d switched_end_flux(const Matrix5& a, const Eigen::Vector2d& psi, 
 }  // namespace
 
 std::string timing_problem(const DriveTiming& timing) {
-    if (!(timing.control_period > 0.0)) return "control period: must be positive";
+    if (!(timing.control_period > 0.0)) {
+        if (timing.carrier()) return "carrier frequency: needs the control period as well";
+        return timing.dc_voltage > 0.0 ? "dc voltage: needs the control period as well" : "";
+    }
     if (!timing.carrier()) return timing.dc_voltage > 0.0 ? "dc voltage: given without the carrier frequency" : "";
     if (!(timing.dc_voltage > 0.0)) return "carrier frequency: needs the DC voltage as well";
     const double carriers = timing.control_period * timing.carrier_frequency;
@@ -181,7 +184,7 @@ Eigen::Vector4d refit_shift(const Measurement& data, const Eigen::Vector4d& base
 }  // namespace
 
 Eigen::Vector4d sample_and_hold_bias(const Measurement& data, const Eigen::Vector4d& base, const DriveTiming& timing) {
-    if (!timing_problem(timing).empty() || data.size() == 0) return Eigen::Vector4d::Zero();
+    if (!(timing.control_period > 0.0) || !timing_problem(timing).empty() || data.size() == 0) return Eigen::Vector4d::Zero();
     // The circuit needs a positive resistance and inductances; an implausible fit gets no correction.
     if (!(base[0] > 0.0 && base[1] > 0.0 && base[2] > 0.0) || !base.allFinite()) return Eigen::Vector4d::Constant(std::nan(""));
     const Eigen::Index max_rows = timing.carrier() ? 500 : 20000;

@@ -37,7 +37,8 @@ struct SampleAndHold {
     Eigen::Vector4d bias = Eigen::Vector4d::Zero();  // fitted - machine's, in the parameters' units
 };
 
-// Why `timing` cannot describe a drive (a field and the reason), or empty.
+// Why `timing` cannot describe a drive, as "<field>: <reason>" with the field "control period",
+// "carrier frequency" or "dc voltage"; empty when it can, or when nothing is stated.
 std::string timing_problem(const DriveTiming& timing);
 // "100 µs" or "100 µs, carrier 10 kHz from 28 V".
 std::string timing_text(const DriveTiming& timing);
@@ -56,7 +57,7 @@ std::complex<double> switched_voltage(const Eigen::Vector4d& base, double omega,
 // (fitted - true, in the parameters' units) on the operating points of `data` when its voltages are
 // held over the control period (switched, when the carrier is stated), for a machine near `base`. One
 // fixed-point step from the fitted values (the bias at the corrected values), on at most 20 000 rows
-// evenly spaced through the log (500 with the carrier, whose solution costs a hundred times more).
+// evenly spaced through the log (500 with the carrier, whose solution costs about 65 times more).
 // NaN when R_s, L_d or L_q of `base` is not positive (no circuit to solve).
 Eigen::Vector4d sample_and_hold_bias(const Measurement& data, const Eigen::Vector4d& base, const DriveTiming& timing);
 
