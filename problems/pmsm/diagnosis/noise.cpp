@@ -55,42 +55,72 @@ NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit) {
     return noise;
 }
 
-namespace {
+WindowAngles::WindowAngles(const Measurement& data) : data_(data), logged_(data.theta_e.has_value()) {
+    if (!logged_ && data.t) integrated_ = integrated_shaft_angle(data, 1);
+}
 
-// Removes from `r` (one window's residual, one axis) its least-squares quadratic in `x` (times
-// scaled to [-1, 1]) and, with `bin` given, its mean in each angle bin: alternating projections onto
-// two nearly orthogonal spaces, which converge to the projection onto their sum (four rounds; the
-// tests hold the estimate within 3-4 % of the truth with them). Returns the parameters spent (3 and the bins used).
-int remove_trend_and_angle_bins(Eigen::Ref<Eigen::VectorXd> r, const Eigen::VectorXd& x, const std::vector<int>& bin, int bins,
-                                std::vector<double>& bin_sum, std::vector<int>& bin_rows) {
-    const Eigen::Index n = r.size();
+bool WindowAngles::available() const { return logged_ || integrated_.size() == data_.size(); }
+
+double WindowAngles::operator[](Eigen::Index row) const { return logged_ ? (*data_.theta_e)[row] : integrated_[row]; }
+
+std::string WindowAngles::text() const { return available() ? (logged_ ? "the logged theta_e" : "omega_e integrated over t") : ""; }
+
+WindowProjection::WindowProjection(const Measurement& data, const WindowAngles& angles, Eigen::Index first, Eigen::Index rows)
+    : first_(first),
+      bins_(angles.available() ? static_cast<int>(std::min<Eigen::Index>(window_noise_bins, rows / window_noise_rows_per_bin)) : 0),
+      x_(rows), bin_(static_cast<std::size_t>(rows)), bin_sum_(static_cast<std::size_t>(bins_)), bin_rows_(static_cast<std::size_t>(bins_)) {
+    const Eigen::Index m = rows;
+    for (Eigen::Index k = 0; k < m; ++k) x_[k] = data.t ? (*data.t)[first + k] : static_cast<double>(k);
+    if (m > 0) {
+        const double mid = 0.5 * (x_[0] + x_[m - 1]), half = 0.5 * (x_[m - 1] - x_[0]);
+        if (half > 0.0) x_.array() = (x_.array() - mid) / half;
+        else x_.setZero();
+    }
+    for (Eigen::Index k = 0; k < m && bins_ > 0; ++k) {
+        const double a = angles[first + k];
+        const double turn = a / (2.0 * std::numbers::pi) - std::floor(a / (2.0 * std::numbers::pi));
+        bin_[static_cast<std::size_t>(k)] = std::min(bins_ - 1, static_cast<int>(turn * bins_));
+    }
     Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
-    for (Eigen::Index k = 0; k < n; ++k) {
-        const Eigen::Vector3d p(1.0, x[k], x[k] * x[k]);
+    for (Eigen::Index k = 0; k < m; ++k) {
+        const Eigen::Vector3d p(1.0, x_[k], x_[k] * x_[k]);
         gram += p * p.transpose();
     }
-    const Eigen::LDLT<Eigen::Matrix3d> solve(gram);
+    trend_.compute(gram);
+}
+
+bool WindowProjection::leaves_noise() const {
+    const Eigen::Index m = x_.size();
+    return m >= 8 && m - 3 - bins_ >= m / 2;
+}
+
+// Alternating projections onto two nearly orthogonal spaces, which converge to the projection onto
+// their sum (four rounds; the tests hold the noise within 3-4 % of the truth with them).
+int WindowProjection::remove(Eigen::Ref<Eigen::VectorXd> r) {
+    const Eigen::Index n = r.size();
     int used = 0;
-    for (int round = 0; round < (bins > 0 ? 4 : 1); ++round) {
+    for (int round = 0; round < (bins_ > 0 ? 4 : 1); ++round) {
         Eigen::Vector3d moment = Eigen::Vector3d::Zero();
-        for (Eigen::Index k = 0; k < n; ++k) moment += r[k] * Eigen::Vector3d(1.0, x[k], x[k] * x[k]);
-        const Eigen::Vector3d c = solve.solve(moment);
-        for (Eigen::Index k = 0; k < n; ++k) r[k] -= c[0] + x[k] * (c[1] + x[k] * c[2]);
-        if (bins == 0) continue;
-        std::fill(bin_sum.begin(), bin_sum.begin() + bins, 0.0);
-        std::fill(bin_rows.begin(), bin_rows.begin() + bins, 0);
+        for (Eigen::Index k = 0; k < n; ++k) moment += r[k] * Eigen::Vector3d(1.0, x_[k], x_[k] * x_[k]);
+        const Eigen::Vector3d c = trend_.solve(moment);
+        for (Eigen::Index k = 0; k < n; ++k) r[k] -= c[0] + x_[k] * (c[1] + x_[k] * c[2]);
+        if (bins_ == 0) continue;
+        std::fill(bin_sum_.begin(), bin_sum_.end(), 0.0);
+        std::fill(bin_rows_.begin(), bin_rows_.end(), 0);
         for (Eigen::Index k = 0; k < n; ++k) {
-            bin_sum[static_cast<std::size_t>(bin[static_cast<std::size_t>(k)])] += r[k];
-            ++bin_rows[static_cast<std::size_t>(bin[static_cast<std::size_t>(k)])];
+            bin_sum_[static_cast<std::size_t>(bin_[static_cast<std::size_t>(k)])] += r[k];
+            ++bin_rows_[static_cast<std::size_t>(bin_[static_cast<std::size_t>(k)])];
         }
         for (Eigen::Index k = 0; k < n; ++k) {
-            const auto b = static_cast<std::size_t>(bin[static_cast<std::size_t>(k)]);
-            r[k] -= bin_sum[b] / bin_rows[b];
+            const auto b = static_cast<std::size_t>(bin_[static_cast<std::size_t>(k)]);
+            r[k] -= bin_sum_[b] / bin_rows_[b];
         }
-        used = static_cast<int>(std::count_if(bin_rows.begin(), bin_rows.begin() + bins, [](int m) { return m > 0; }));
+        used = static_cast<int>(std::count_if(bin_rows_.begin(), bin_rows_.end(), [](int m) { return m > 0; }));
     }
     return 3 + used;
 }
+
+namespace {
 
 struct WindowVariance {
     double variance = 0.0, correlation = 0.0, dof = 0.0;
@@ -121,41 +151,23 @@ WindowNoise window_noise(const Measurement& data, const ModelFit& fit) {
 WindowNoise window_noise(const Measurement& data, const Eigen::VectorXd& residual) {
     const Eigen::Index n = data.size();
     WindowNoise noise;
-    const bool angle_logged = data.theta_e.has_value();
-    Eigen::VectorXd integrated;
-    if (!angle_logged && data.t) integrated = integrated_shaft_angle(data, 1);
-    const bool has_angle = angle_logged || integrated.size() == n;
-    std::vector<double> bin_sum(window_noise_bins);
-    std::vector<int> bin_rows(window_noise_bins);
-    std::vector<int> bin;
-    Eigen::VectorXd x, r;
+    const WindowAngles angles(data);
+    Eigen::VectorXd r;
     // Per window and axis: variance, lag-one correlation, degrees of freedom.
     std::array<std::vector<WindowVariance>, 2> windows;
     for (const auto& segment : segment_ranges(data)) {
         // A longer segment is measured on its middle rows only (noise.hpp): a fixed cost a segment.
         const Eigen::Index m = std::min(segment.rows, window_noise_max_rows);
-        const Eigen::Index first = segment.first + (segment.rows - m) / 2;
-        const int bins = has_angle ? static_cast<int>(std::min<Eigen::Index>(window_noise_bins, m / window_noise_rows_per_bin)) : 0;
-        if (m - 3 - bins < m / 2 || m < 8) continue;  // too short to leave the noise most of its rows
-        x.resize(m);
-        for (Eigen::Index k = 0; k < m; ++k) x[k] = data.t ? (*data.t)[first + k] : static_cast<double>(k);
-        const double mid = 0.5 * (x[0] + x[m - 1]), half = 0.5 * (x[m - 1] - x[0]);
-        if (half > 0.0) x.array() = (x.array() - mid) / half;
-        else x.setZero();
-        bin.resize(static_cast<std::size_t>(m));
-        for (Eigen::Index k = 0; k < m && bins > 0; ++k) {
-            const double a = angle_logged ? (*data.theta_e)[first + k] : integrated[first + k];
-            const double turn = a / (2.0 * std::numbers::pi) - std::floor(a / (2.0 * std::numbers::pi));
-            bin[static_cast<std::size_t>(k)] = std::min(bins - 1, static_cast<int>(turn * bins));
-        }
+        WindowProjection projection(data, angles, segment.first + (segment.rows - m) / 2, m);
+        if (!projection.leaves_noise()) continue;
         for (int axis = 0; axis < 2; ++axis) {
-            r = residual.segment(axis * n + first, m);
-            const double dof = static_cast<double>(m - remove_trend_and_angle_bins(r, x, bin, bins, bin_sum, bin_rows));
+            r = residual.segment(axis * n + projection.first(), m);
+            const double dof = static_cast<double>(m - projection.remove(r));
             const double square = r.squaredNorm();
             windows[axis].push_back({square / dof, square > 0.0 ? r.head(m - 1).dot(r.tail(m - 1)) / square : 0.0, dof});
         }
     }
-    noise.angle = has_angle ? (angle_logged ? "the logged theta_e" : "omega_e integrated over t") : "";
+    noise.angle = angles.text();
     if (windows[0].empty()) return noise;
     for (int axis = 0; axis < 2; ++axis) {
         auto& w = windows[axis];

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "problems/pmsm/diagnosis/diagnosis.hpp"
 
 namespace mhb::pmsm {
@@ -12,6 +14,45 @@ namespace mhb::pmsm {
 // long-run standard deviation of its mean (AR(1)-prewhitened Newey-West, at least sigma). The
 // dispersion is left at 1.
 NoiseEstimate estimate_noise(const Measurement& data, const ModelFit& fit);
+
+// The electrical angle of each row, as window_noise bins it: the logged theta_e, else omega_e
+// integrated over t; none without either.
+class WindowAngles {
+public:
+    explicit WindowAngles(const Measurement& data);
+    bool available() const;
+    double operator[](Eigen::Index row) const;
+    std::string text() const;  // where the angle comes from; empty when there is none
+
+private:
+    const Measurement& data_;
+    bool logged_;
+    Eigen::VectorXd integrated_;
+};
+
+// What a steady window's residual holds besides noise, removed: its least-squares quadratic in time
+// (times scaled to [-1, 1], row numbers without t) and its mean in each of up to window_noise_bins
+// bins of the electrical angle (window_noise_rows_per_bin rows a bin on average).
+class WindowProjection {
+public:
+    WindowProjection(const Measurement& data, const WindowAngles& angles, Eigen::Index first, Eigen::Index rows);
+    Eigen::Index first() const { return first_; }
+    int bins() const { return bins_; }
+    // Whether the projection leaves the noise most of the window's rows (and the window has 8).
+    bool leaves_noise() const;
+    // Removes both from `r` (the window's rows of one axis); returns the parameters spent (3 and the
+    // bins used).
+    int remove(Eigen::Ref<Eigen::VectorXd> r);
+
+private:
+    Eigen::Index first_;
+    int bins_;
+    Eigen::VectorXd x_;
+    std::vector<int> bin_;
+    std::vector<double> bin_sum_;
+    std::vector<int> bin_rows_;
+    Eigen::LDLT<Eigen::Matrix3d> trend_;
+};
 
 // The noise measured from the data, not from the residual's level: within each segment (the whole
 // log without one), per axis, the residual of `fit` less its least-squares
