@@ -97,7 +97,9 @@ def fit(data, model: str = "base", *, optimizer: str = "cmaes", evaluations: int
     nonlinear parameters; settle drops that many seconds after each segment start; search_rows bounds the
     rows the search uses; threads caps the worker threads (results do not depend on it); control_period (s),
     as `--control-period`, adds report["sample_and_hold"]: the base parameters corrected for the drive's sample
-    and hold, with carrier_frequency (Hz) and dc_voltage (V) its carrier's ripple too (docs/diagnosis.md)."""
+    and hold, with carrier_frequency (Hz) and dc_voltage (V) its carrier's ripple too (docs/diagnosis.md);
+    report["shared_noise"], where the data have an angle and steady windows, states what the noise the logged current
+    and voltage share does to the base parameters, as `mhbench fit` does."""
     return _fit_result(_bindings.fit(data, model, optimizer, evaluations, seed, settle, search_rows, columns,
                                      pole_pairs, threads, control_period, carrier_frequency, dc_voltage))
 

@@ -55,12 +55,12 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         const auto found = find_operating_points_option(*o, data);
         const auto fit = pmsm::fit_model(data, spec, fit_options(*o));
         fmt::print("{}", pmsm::fit_text(fit, data));
-        const auto held = sample_and_hold_option(*o, data, fit);
-        if (held) fmt::print("{}", pmsm::sample_and_hold_text(fit, *held));
+        const auto corrections = pmsm::fit_corrections(data, fit, o->timing);
+        fmt::print("{}", pmsm::corrections_text(fit, corrections));
         if (!o->json.empty()) {
             auto out = pmsm::fit_json(fit);
             out["data"] = o->data;
-            if (held) out["sample_and_hold"] = pmsm::sample_and_hold_json(fit, *held);
+            out.update(pmsm::corrections_json(fit, corrections));
             if (found) out["operating_points"] = pmsm::operating_points_json(*found);
             replace_file(o->json, out.dump(2) + "\n");
             fmt::print("\nJSON: {}\n", o->json);

@@ -87,13 +87,6 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
     cmd->add_option("--json", o.json, json_help);
 }
 
-// The sample and hold of --control-period on the steady-state fit `fit` of `data`; none without the option.
-inline std::optional<pmsm::SampleAndHold> sample_and_hold_option(const ModelCommandOptions& o, const pmsm::Measurement& data,
-                                                                 const pmsm::ModelFit& fit) {
-    if (!(o.timing.control_period > 0.0)) return std::nullopt;
-    return pmsm::SampleAndHold{o.timing, pmsm::sample_and_hold_bias(data, fit.values.head<4>(), o.timing)};
-}
-
 // " --control-period T [--carrier-frequency F --dc-voltage V]" as given, for the commands suggested next.
 inline std::string timing_options_text(const ModelCommandOptions& o) {
     if (!(o.timing.control_period > 0.0)) return {};

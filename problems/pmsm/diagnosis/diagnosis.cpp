@@ -85,6 +85,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.interval_caveats = interval_caveats(data, out, options.fit);
     if (options.timing.control_period > 0.0)
         out.sample_and_hold = SampleAndHold{options.timing, sample_and_hold_bias(data, out.recommended_fit().values.head<4>(), options.timing)};
+    out.shared_noise = shared_noise_bias(data, out.recommended_fit());
     out.findings = findings_of(out, trace.left[r.step], options.floor_tolerance);
     return out;
 }

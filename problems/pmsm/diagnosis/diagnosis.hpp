@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/diagnosis/shared_noise.hpp"
 #include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
@@ -349,6 +350,9 @@ struct Diagnosis {
     std::vector<IntervalCaveat> interval_caveats;
     // With DiagnosisOptions::control_period: what its sample and hold does to the recommended model's base parameters.
     std::optional<SampleAndHold> sample_and_hold;
+    // What noise the current and the voltage share does to the recommended model's base parameters
+    // (shared_noise.hpp); nothing when the data have no angle or no window to measure it in.
+    std::optional<SharedNoise> shared_noise;
 
     // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
     // only when nothing the data show is left out of it (an interval assumes the residual is noise).

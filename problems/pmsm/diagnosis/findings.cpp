@@ -322,6 +322,27 @@ std::string sample_and_hold_finding(const Diagnosis& d) {
                        timing_text(held.timing), held.timing.carrier() ? ", switched by the carrier" : "", fmt::join(corrected, ", "));
 }
 
+// The noise the current and the voltage share, on the recommended model's base parameters.
+std::string shared_noise_finding(const Diagnosis& d) {
+    const ModelFit& recommended = d.recommended_fit();
+    const SharedNoise& shared = *d.shared_noise;
+    const bool held = d.sample_and_hold && d.sample_and_hold->bias.allFinite();
+    std::vector<std::string> shifts, corrected;
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const auto& name = recommended.names[static_cast<std::size_t>(j)];
+        const double value = recommended.values[j] - shared.bias[j] - (held ? d.sample_and_hold->bias[j] : 0.0);
+        const double machine = recommended.values[j] - shared.bias[j];
+        shifts.push_back(fmt::format("{} {:+.3g} % (standard error {:.2g} %)", name, 100.0 * shared.bias[j] / machine, 100.0 * shared.standard_error[j] / machine));
+        corrected.push_back(fmt::format("{} {:.6g}", name, value));
+    }
+    return fmt::format("The logged current and voltage share noise (a current loop answers the current sensors' noise within its control "
+                       "period, and a noisy current enters R i, omega L i and the effects' laws): measured in {} steady window{}, it reads "
+                       "the base parameters {} off the machine's; corrected for it{} they are {} (`mhbench fit` gives the corrected "
+                       "intervals; docs/diagnosis.md).",
+                       shared.windows, shared.windows == 1 ? "" : "s", fmt::join(shifts, ", "), held ? " and for the sample and hold" : "",
+                       fmt::join(corrected, ", "));
+}
+
 }  // namespace
 
 std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_by_last_step, double floor_tolerance) {
@@ -353,6 +374,7 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     : std::string()));
     for (const auto& caveat : d.interval_caveats) f.push_back("Beyond the intervals of " + d.recommended.text() + ": " + caveat.reason + ".");
     if (d.sample_and_hold) f.push_back(sample_and_hold_finding(d));
+    if (d.shared_noise && d.shared_noise->relevant()) f.push_back(shared_noise_finding(d));
     data_findings(d, f);
     return f;
 }

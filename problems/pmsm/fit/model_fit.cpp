@@ -732,13 +732,15 @@ Eigen::MatrixXd leave_one_range_out_steps(const RangeNormalEquations& sums) {
 }
 
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
-                                            const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts) {
-    return std::move(partitioned_normal_equations(model, values, columns, {starts}).front());
+                                            const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts,
+                                            const Eigen::VectorXd* residual) {
+    return std::move(partitioned_normal_equations(model, values, columns, {starts}, residual).front());
 }
 
 std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                                          const std::vector<Eigen::Index>& columns,
-                                                         const std::vector<std::vector<Eigen::Index>>& partitions) {
+                                                         const std::vector<std::vector<Eigen::Index>>& partitions,
+                                                         const Eigen::VectorXd* residual) {
     const auto& data = model.data();
     const auto p = static_cast<Eigen::Index>(columns.size());
     // Each block's share, per partition and range it touches; merged in block order so that any
@@ -764,8 +766,13 @@ std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyState
             // The prediction at `values` from the affine split block_jacobian left behind.
             const AffinePrediction& a = scratch.affine[model.scratch_index(b)];
             auto residual_d = augmented.col(p).head(rows), residual_q = augmented.col(p).tail(rows);
-            residual_d = data.u_d.segment(first, rows) - a.offset_d.matrix() - a.phi_d.matrix() * values.head<4>();
-            residual_q = data.u_q.segment(first, rows) - a.offset_q.matrix() - a.phi_q.matrix() * values.head<4>();
+            if (residual) {
+                residual_d = residual->segment(first, rows);
+                residual_q = residual->segment(data.size() + first, rows);
+            } else {
+                residual_d = data.u_d.segment(first, rows) - a.offset_d.matrix() - a.phi_d.matrix() * values.head<4>();
+                residual_q = data.u_q.segment(first, rows) - a.offset_q.matrix() - a.phi_q.matrix() * values.head<4>();
+            }
             auto& out = shares[static_cast<std::size_t>(b)];
             out.clear();
             for (std::size_t partition = 0; partition < partitions.size(); ++partition) {

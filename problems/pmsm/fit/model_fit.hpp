@@ -136,19 +136,22 @@ void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values
 // The model linearised at `values` in the listed parameters (the prediction Jacobian J, columns as
 // prediction_jacobian) and reduced over each range of rows: J'J, J'r and r'r with r the residual at
 // `values`. `starts` are the first rows of consecutive ranges (starts[0] = 0) that cover all rows.
-// Computed a block of rows at a time, blocks in parallel, without a row-sized array.
+// Computed a block of rows at a time, blocks in parallel, without a row-sized array. With `residual`
+// (stacked d then q, as residual_stacked) J'r and r'r are of it instead.
 struct RangeNormalEquations {
     std::vector<Eigen::MatrixXd> gram;
     std::vector<Eigen::VectorXd> moment;
     std::vector<double> total;
 };
 RangeNormalEquations range_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
-                                            const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts);
+                                            const std::vector<Eigen::Index>& columns, const std::vector<Eigen::Index>& starts,
+                                            const Eigen::VectorXd* residual = nullptr);
 // The same for several partitions of the rows (each a `starts`) in one pass: one Jacobian of each
 // block, the sums of each partition the numbers range_normal_equations gives for it alone.
 std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyStateModel& model, const Eigen::VectorXd& values,
                                                          const std::vector<Eigen::Index>& columns,
-                                                         const std::vector<std::vector<Eigen::Index>>& partitions);
+                                                         const std::vector<std::vector<Eigen::Index>>& partitions,
+                                                         const Eigen::VectorXd* residual = nullptr);
 // The sums of some of the columns they were made with (`positions` index those columns): the numbers
 // range_normal_equations gives for those columns alone, since each entry is reduced on its own.
 RangeNormalEquations select_columns(const RangeNormalEquations& sums, const std::vector<Eigen::Index>& positions);

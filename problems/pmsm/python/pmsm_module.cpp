@@ -165,18 +165,18 @@ py::dict fit(py::handle data, const std::string& model, const std::string& optim
     const auto found = segment_at_operating_points(measurement);
     const auto limit = thread_limit(threads);
     ModelFit result;
+    FitCorrections corrections;
     {
         py::gil_scoped_release release;
         result = fit_model(measurement, spec, options);
+        corrections = fit_corrections(measurement, result, timing);
     }
     py::dict out = fit_result(measurement, result);
     // As `mhbench fit --json` writes it and prints it.
     py::dict written = out["report"];
-    if (timing.control_period > 0.0) {
-        const SampleAndHold held{timing, sample_and_hold_bias(measurement, result.values.head<4>(), timing)};
-        written["sample_and_hold"] = json_object(sample_and_hold_json(result, held));
-        out["text"] = py::str(fit_text(result, measurement) + sample_and_hold_text(result, held));
-    }
+    const auto stated = corrections_json(result, corrections);  // a named object: a range-for does not extend a temporary's life before C++23
+    for (const auto& [key, value] : stated.items()) written[py::str(key)] = json_object(value);
+    out["text"] = py::str(fit_text(result, measurement) + corrections_text(result, corrections));
     if (found) written["operating_points"] = json_object(operating_points_json(*found));
     return out;
 }

@@ -75,6 +75,8 @@ json diagnosis_json(const Diagnosis& d) {
     }
     out["recommended_interval_caveats"] = caveats;
     if (d.sample_and_hold) out["sample_and_hold"] = sample_and_hold_json(d.recommended_fit(), *d.sample_and_hold);
+    if (d.shared_noise)
+        out["shared_noise"] = shared_noise_json(d.recommended_fit(), *d.shared_noise, d.sample_and_hold ? &*d.sample_and_hold : nullptr);
     json path = json::array();
     for (const auto& step : d.path) {
         path.push_back({{"model", step.fit.spec.text()},

@@ -136,4 +136,75 @@ json sample_and_hold_json(const ModelFit& fit, const SampleAndHold& held) {
     return out;
 }
 
+namespace {
+
+double held_bias(const SampleAndHold* held, Eigen::Index j) { return held && held->bias.allFinite() ? held->bias[j] : 0.0; }
+
+}  // namespace
+
+std::string shared_noise_text(const ModelFit& fit, const SharedNoise& shared, const SampleAndHold* held) {
+    std::vector<std::string> shifts;
+    for (Eigen::Index j = 0; j < 4; ++j)
+        shifts.push_back(fmt::format("{} {:+.3g} % (standard error {:.2g} %)", fit.names[static_cast<std::size_t>(j)],
+                                     100.0 * shared.bias[j] / (fit.values[j] - shared.bias[j]), 100.0 * shared.standard_error[j] / (fit.values[j] - shared.bias[j])));
+    std::string t = fmt::format(
+        "\nnoise the current and the voltage share (a current loop answers the current sensors' noise within its control period, and a "
+        "noisy current enters R i, omega L i and the effects' laws): measured in {} steady window{}, it makes the model read {} off the "
+        "machine (docs/diagnosis.md); corrected{}:\n",
+        shared.windows, shared.windows == 1 ? "" : "s", fmt::join(shifts, ", "),
+        held && held->bias.allFinite() ? " for it and for the sample and hold above" : "");
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const auto k = static_cast<std::size_t>(j);
+        const auto [lo, hi] = shared.corrected_interval(fit, j, held_bias(held, j));
+        const std::string interval = !fit.free[k] ? "fixed" : std::isfinite(lo) && std::isfinite(hi) ? fmt::format("[{:.6g}, {:.6g}]", lo, hi)
+                                                                                                       : "not determined by the data";
+        t += fmt::format("{:<28} {:>14} {:>36}  {}\n", fit.names[k], value_text(fit.values[j] - shared.bias[j] - held_bias(held, j)), interval,
+                         fit.units[k]);
+    }
+    return t;
+}
+
+json shared_noise_json(const ModelFit& fit, const SharedNoise& shared, const SampleAndHold* held) {
+    json out;
+    out["windows"] = shared.windows;
+    out["relevant"] = shared.relevant();
+    json bias = json::object(), error = json::object(), corrected = json::object();
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const auto& name = fit.names[static_cast<std::size_t>(j)];
+        const double value = fit.values[j] - shared.bias[j] - held_bias(held, j);
+        bias[name] = shared.bias[j] / value;
+        error[name] = finite_or_null(shared.standard_error[j] / value);
+        const auto [lo, hi] = shared.corrected_interval(fit, j, held_bias(held, j));
+        corrected[name] = {{"value", value},
+                           {"ci95", fit.free[static_cast<std::size_t>(j)] && std::isfinite(lo) && std::isfinite(hi) ? json::array({lo, hi})
+                                                                                                                    : json(nullptr)}};
+    }
+    out["bias"] = bias;
+    out["standard_error"] = error;
+    out["corrected"] = corrected;
+    return out;
+}
+
+FitCorrections fit_corrections(const Measurement& data, const ModelFit& fit, const DriveTiming& timing) {
+    FitCorrections out;
+    if (timing.control_period > 0.0) out.held = SampleAndHold{timing, sample_and_hold_bias(data, fit.values.head<4>(), timing)};
+    out.shared = shared_noise_bias(data, fit);
+    return out;
+}
+
+std::string corrections_text(const ModelFit& fit, const FitCorrections& corrections) {
+    std::string t;
+    if (corrections.held) t += sample_and_hold_text(fit, *corrections.held);
+    if (corrections.shared && corrections.shared->relevant())
+        t += shared_noise_text(fit, *corrections.shared, corrections.held ? &*corrections.held : nullptr);
+    return t;
+}
+
+json corrections_json(const ModelFit& fit, const FitCorrections& corrections) {
+    json out = json::object();
+    if (corrections.held) out["sample_and_hold"] = sample_and_hold_json(fit, *corrections.held);
+    if (corrections.shared) out["shared_noise"] = shared_noise_json(fit, *corrections.shared, corrections.held ? &*corrections.held : nullptr);
+    return out;
+}
+
 }  // namespace mhb::pmsm

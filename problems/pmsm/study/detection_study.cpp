@@ -655,16 +655,23 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         const bool corrected = d.sample_and_hold && d.sample_and_hold->bias.allFinite();
         const Eigen::Vector4d held = corrected ? d.sample_and_hold->bias : Eigen::Vector4d::Zero();
         if (corrected) r.sample_and_hold_bias = held.cwiseQuotient(truth);
-        r.base_error = (fit->values.head<4>() - held - truth).cwiseQuotient(truth);
+        // And for the noise the current and the voltage share, as the diagnosis measured it.
+        // Where the diagnosis states it (SharedNoise::relevant), as a user would correct for it.
+        const SharedNoise* stated = d.shared_noise && d.shared_noise->relevant() ? &*d.shared_noise : nullptr;
+        const Eigen::Vector4d shared = stated ? stated->bias : Eigen::Vector4d::Zero();
+        if (stated) r.shared_noise_bias = shared.cwiseQuotient(truth);
+        r.base_error = (fit->values.head<4>() - held - shared - truth).cwiseQuotient(truth);
         // The search compares its sets without intervals; the recommended one gets them here, polished
         // from where the search left it.
         FitOptions with_intervals = options.fit;
         with_intervals.intervals = true;
         with_intervals.keep_residual = false;
         const ModelFit interval_fit = polish_model(result.data, fit->spec, fit->values, with_intervals);
-        for (int j = 0; j < 4; ++j)
-            if (std::isfinite(interval_fit.lower[j]) && std::isfinite(interval_fit.upper[j]))
-                r.covered[static_cast<std::size_t>(j)] = interval_fit.lower[j] - held[j] <= truth[j] && truth[j] <= interval_fit.upper[j] - held[j] ? 1 : 0;
+        for (int j = 0; j < 4; ++j) {
+            const auto [lower, upper] = stated ? stated->corrected_interval(interval_fit, j, held[j])
+                                                       : std::pair{interval_fit.lower[j] - held[j], interval_fit.upper[j] - held[j]};
+            if (std::isfinite(lower) && std::isfinite(upper)) r.covered[static_cast<std::size_t>(j)] = lower <= truth[j] && truth[j] <= upper ? 1 : 0;
+        }
         r.flux_error = flux_error_of(sim, result.data, *fit);
         r.rms = d.model.rms.total;
         r.rms_recommended = fit->rms.total;
@@ -827,7 +834,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                   "saying \"not in the library\" and, when the study file names the mechanical order it leaves, naming that order). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
                                   "true| / true of the recommended model's base parameters. Interval coverage: over the drives whose recommended model is "
                                   "correct, the share in which the 95 % interval of each base parameter (the recommended model polished with intervals) "
-                                  "holds the plant's value; at least 90 % is what a 95 % interval owes.{} \"Where no structure is left\": the same over the drives "
+                                  "holds the plant's value; at least 90 % is what a 95 % interval owes.{}{} \"Where no structure is left\": the same over the drives "
                                   "whose recommended model leaves no significant structure in the residual (segment means, angle harmonics). \"Correct or "
                                   "below the printed limit\": also counting a drive that added nothing false, did not say \"not in the library\" and missed only effects whose true size, as the "
                                   "study file states it (`clear_size`, `weak_size`), lies below the detection limit the diagnosis printed for them.",
@@ -837,6 +844,11 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                         "does, and the diagnosis is told the period, the carrier frequency and the DC voltage as it is told the pole "
                                         "pairs: errors and intervals are of the base parameters corrected for the sample and hold and the carrier's "
                                         "ripple (`diagnose --control-period --carrier-frequency --dc-voltage`, docs/diagnosis.md)."
+                                      : "",
+                                  std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.shared_noise_bias.has_value(); })
+                                      ? " Where the diagnosis states it, errors and intervals are also of the base parameters corrected for the noise "
+                                        "the logged current and voltage share, as it measures that in the steady windows, the intervals widened by "
+                                        "the estimate's standard error (docs/diagnosis.md, section 7)."
                                       : "")});
     // Only where a case fits its sizes, so that the other studies' tables stay as they were.
     std::vector<std::string> fitted;
@@ -1059,6 +1071,9 @@ nlohmann::ordered_json study_record_json(const StudyRun& run, const StudyRecord&
     if (r.sample_and_hold_bias)
         out["sample_and_hold_bias"] = {{"Rs", (*r.sample_and_hold_bias)[0]}, {"Ld", (*r.sample_and_hold_bias)[1]},
                                        {"Lq", (*r.sample_and_hold_bias)[2]}, {"psi_f", (*r.sample_and_hold_bias)[3]}};
+    if (r.shared_noise_bias)
+        out["shared_noise_bias"] = {{"Rs", (*r.shared_noise_bias)[0]}, {"Ld", (*r.shared_noise_bias)[1]},
+                                    {"Lq", (*r.shared_noise_bias)[2]}, {"psi_f", (*r.shared_noise_bias)[3]}};
     // Only when some were named, so that the records of drives without a whole turn stay as they were.
     if (!r.mechanical_orders.empty()) out["mechanical_orders"] = r.mechanical_orders;
     // Only for the cases that fit them (StudyCase::pseudo_true_sized).

@@ -161,6 +161,10 @@ struct StudyRecord {
     // The control period's sample and hold on those (Diagnosis::sample_and_hold, relative to the true
     // values), when the diagnosis was told the period; base_error and covered are then of the corrected values.
     std::optional<Eigen::Vector4d> sample_and_hold_bias;
+    // And the noise the logged current and voltage share (Diagnosis::shared_noise, relative to the
+    // true values), when the diagnosis could measure it; base_error and covered are of the values
+    // corrected for it, the intervals widened by its standard error.
+    std::optional<Eigen::Vector4d> shared_noise_bias;
     // Whether the recommended model's 95 % interval of Rs, Ld, Lq, psi_f holds the true value: 1 yes,
     // 0 no, -1 no interval (the data do not determine it).
     std::array<int, 4> covered{-1, -1, -1, -1};
