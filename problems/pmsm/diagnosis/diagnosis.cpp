@@ -77,7 +77,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     out.incomplete = r.incomplete;
     out.recommended_step = r.step;
     const PathStep& last = out.path[r.step];
-    const ModelFit& recommended = out.recommended.text() == out.model.spec.text() ? out.model : last.fit;
+    const ModelFit& recommended = out.recommended_fit();
     out.law_error_beyond_noise = &recommended == &last.fit && last.at_noise_floor && last.structure >= options.floor_tolerance;
     out.detection_limits = detection_limits(design, data.size(), recommended, screen.library, out.noise);
     for (const auto& h : trace.left[r.step].mechanical_harmonics)

@@ -357,9 +357,12 @@ struct Diagnosis {
     // Whether the 95 % intervals of the model diagnosed, and of the model recommended, can be trusted:
     // only when nothing the data show is left out of it (an interval assumes the residual is noise).
     bool model_intervals_valid() const { return !missing_effect_found && !not_in_library; }
-    // The fit of the recommended model: the search's step that made it, else the model diagnosed.
+    // The fit of the recommended model, the one every figure of it is read from (its corrections,
+    // detection limits, interval caveats, the studies' errors): the model diagnosed when that is
+    // recommended (its fit has intervals and took every row), else the search's step that made it.
     const ModelFit& recommended_fit() const {
-        const bool from_path = !path.empty() && path[recommended_step].fit.spec.text() == recommended.text();
+        const bool from_path = recommended.text() != model.spec.text() && !path.empty() &&
+                               path[recommended_step].fit.spec.text() == recommended.text();
         return from_path ? path[recommended_step].fit : model;
     }
     bool recommended_intervals_valid() const { return !incomplete && !not_in_library && tie.empty() && !law_error_beyond_noise; }

@@ -644,12 +644,10 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
                                  std::find(r.mechanical_orders.begin(), r.mechanical_orders.end(), c.mechanical_order) != r.mechanical_orders.end();
         r.correct = r.found == c.truth && (!c.outside || (d.not_in_library && order_named));
         // The base parameters of the recommended model against the plant's (at 20 °C).
-        const ModelFit* fit = &d.model;
+        const ModelFit* fit = &d.recommended_fit();
+        // The structure the recommended set leaves, from its step of the search (the model diagnosed is the first).
         for (const auto& step : d.path)
-            if (step.fit.spec.text() == r.recommended) {
-                fit = &step.fit;
-                r.structure_left = step.structure;
-            }
+            if (step.fit.spec.text() == r.recommended) r.structure_left = step.structure;
         const Eigen::Vector4d truth(sim.motor.rs, sim.motor.ld, sim.motor.lq, sim.motor.psi_f);
         // Corrected for the control period's sample and hold where the diagnosis was told it.
         const bool corrected = d.sample_and_hold && d.sample_and_hold->bias.allFinite();
