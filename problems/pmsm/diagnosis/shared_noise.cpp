@@ -32,7 +32,7 @@ std::optional<SharedNoise> shared_noise_bias(const Measurement& data, const Mode
     Eigen::VectorXd storage;
     const Eigen::VectorXd& residual = residual_of(data, fit, storage);
     Eigen::VectorXd projected = &residual == &storage ? std::move(storage) : residual;
-    std::vector<Eigen::Index> starts;
+    std::vector<Eigen::Index> starts, sizes;
     std::vector<bool> measured;
     // The projection takes its parameters' share of the noise with it: of m rows' noise, m - spent
     // rows' worth is left in the product, which is scaled back to m.
@@ -41,6 +41,7 @@ std::optional<SharedNoise> shared_noise_bias(const Measurement& data, const Mode
     // and its rows count in J'J alone, as in the fit.
     for (const auto& segment : segment_ranges(data)) {
         starts.push_back(segment.first);
+        sizes.push_back(segment.rows);
         WindowProjection projection(data, angles, segment.first, segment.rows);
         measured.push_back(projection.leaves_noise());
         int spent = 0;
@@ -70,7 +71,7 @@ std::optional<SharedNoise> shared_noise_bias(const Measurement& data, const Mode
         moment += window_moment[w];
         if (measured[w]) {
             square += sums.total[w] / kept[w];
-            rows += (w + 1 < starts.size() ? starts[w + 1] : n) - starts[w];
+            rows += sizes[w];
             ++out.windows;
         }
     }
@@ -88,7 +89,7 @@ std::optional<SharedNoise> shared_noise_bias(const Measurement& data, const Mode
     Eigen::MatrixXd spread = Eigen::MatrixXd::Zero(p, p);
     for (std::size_t w = 0; w < starts.size(); ++w) {
         if (!measured[w]) continue;
-        const double share = static_cast<double>((w + 1 < starts.size() ? starts[w + 1] : n) - starts[w]) / static_cast<double>(rows);
+        const double share = static_cast<double>(sizes[w]) / static_cast<double>(rows);
         const Eigen::VectorXd d = window_moment[w] - share * moment;
         spread += d * d.transpose();
     }
