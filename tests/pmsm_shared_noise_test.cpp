@@ -9,13 +9,17 @@
 #include <numbers>
 #include <random>
 
+#include <nlohmann/json.hpp>
+
 #include "problems/pmsm/data/operating_points.hpp"
 #include "problems/pmsm/diagnosis/shared_noise.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/model/model_spec.hpp"
 #include "problems/pmsm/simulation/drive_simulator.hpp"
 #include "problems/pmsm/simulation/simulation_profile.hpp"
+#include "tests/mhbench_cli.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
+#include "tests/temporary_directory.hpp"
 
 using namespace mhb::pmsm;
 
@@ -72,6 +76,20 @@ Corrected fit_and_correct(const Measurement& data, const Eigen::Vector4d& truth)
             *shared};
 }
 
+// The 5 kW machine's raw log of noise seed `seed`, with its true base parameters.
+struct RawDrive {
+    Measurement data;
+    Eigen::Vector4d truth;
+    double control_period = 0.0;
+};
+RawDrive raw_5kw_drive(unsigned seed) {
+    auto drive = read_simulation_profile(mhb::pmsm::testing::profile_path("device_5kw_profile.toml"));
+    drive.logging.transients = true;
+    drive.logging.segment = false;
+    drive.seed = seed;
+    return {simulate(drive).data, {drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f}, drive.control.control_period};
+}
+
 }  // namespace
 
 TEST_CASE("the bias a proportional loop's answer to the current sensors' noise puts in a fit is measured and removed", "[pmsm][shared_noise]") {
@@ -122,24 +140,40 @@ TEST_CASE("on the 5 kW machine's raw logs the closed loop's bias on Rs is remove
     // sensors' 25 mA of noise; Rs read about 0.3 % low, beyond its 95 % interval (detection_study_raw_5kw).
     for (const unsigned seed : {1u, 2u}) {
         INFO("seed " << seed);
-        auto drive = read_simulation_profile(mhb::pmsm::testing::profile_path("device_5kw_profile.toml"));
-        drive.logging.transients = true;
-        drive.logging.segment = false;
-        drive.seed = seed;
-        Measurement data = simulate(drive).data;
-        const auto points = find_operating_points(data);
-        data = select_operating_points(std::move(data), points);
-        const Eigen::Vector4d truth{drive.motor.rs, drive.motor.ld, drive.motor.lq, drive.motor.psi_f};
+        const RawDrive drive = raw_5kw_drive(seed);
+        const auto points = find_operating_points(drive.data);
+        const Measurement data = select_operating_points(Measurement(drive.data), points);
+        const Eigen::Vector4d& truth = drive.truth;
         const ModelFit fit = fit_model(data, parse_model_spec("base"), FitOptions{});
         const auto shared = shared_noise_bias(data, fit);
         REQUIRE(shared);
         CHECK(shared->relevant());
         // The sample and hold's share (+0.16 % on Rs, sample_and_hold_test) set aside, as the study does.
-        const Eigen::Vector4d held = sample_and_hold_bias(data, fit.values.head<4>(), DriveTiming{drive.control.control_period});
+        const Eigen::Vector4d held = sample_and_hold_bias(data, fit.values.head<4>(), DriveTiming{drive.control_period});
         const double before = fit.values[0] - held[0], after = before - shared->bias[0];
         CHECK_FALSE((fit.lower[0] - held[0] <= truth[0] && truth[0] <= fit.upper[0] - held[0]));
         const auto [lower, upper] = shared->corrected_interval(fit, 0, held[0]);
         CHECK((lower <= truth[0] && truth[0] <= upper));
         CHECK(std::abs(after / truth[0] - 1.0) < 0.3 * std::abs(before / truth[0] - 1.0));
     }
+}
+
+TEST_CASE("fit states the shared noise where it matters and writes it to JSON, corrected for it and the sample and hold", "[pmsm][shared_noise][cli]") {
+    mhb::testing::TemporaryDirectory dir;
+    const RawDrive drive = raw_5kw_drive(3);
+    const auto csv = dir.path() / "raw.csv", json = dir.path() / "fit.json";
+    write_measurement(csv, drive.data);
+    const auto fit = mhb::testing::run_mhbench("fit --data " + csv.string() + " --model base --control-period 125e-6 --json " + json.string(), dir.path() / "log");
+    INFO(fit.output);
+    REQUIRE(fit.exit_code == 0);
+    CHECK(fit.output.find("noise the current and the voltage share") != std::string::npos);
+    CHECK(fit.output.find("corrected for it and for the sample and hold above") != std::string::npos);
+    const auto shared = nlohmann::json::parse(mhb::testing::read_file(json)).at("shared_noise");
+    CHECK(shared.at("relevant").get<bool>());
+    CHECK(shared.at("windows").get<int>() >= 3);
+    CHECK(shared.at("bias").at("Rs").get<double>() < -0.001);  // the loop reads Rs low
+    const auto& rs = shared.at("corrected").at("Rs");
+    CHECK(std::abs(rs.at("value").get<double>() / drive.truth[0] - 1.0) < 0.001);
+    CHECK(rs.at("ci95").at(0).get<double>() <= drive.truth[0]);
+    CHECK(drive.truth[0] <= rs.at("ci95").at(1).get<double>());
 }
