@@ -327,13 +327,11 @@ std::string shared_noise_finding(const Diagnosis& d) {
     const ModelFit& recommended = d.recommended_fit();
     const SharedNoise& shared = *d.shared_noise;
     const bool held = d.sample_and_hold && d.sample_and_hold->bias.allFinite();
-    std::vector<std::string> shifts, corrected;
+    const std::vector<std::string> shifts = shared.shift_texts(recommended);
+    std::vector<std::string> corrected;
     for (Eigen::Index j = 0; j < 4; ++j) {
-        const auto& name = recommended.names[static_cast<std::size_t>(j)];
         const double value = recommended.values[j] - shared.bias[j] - (held ? d.sample_and_hold->bias[j] : 0.0);
-        const double machine = recommended.values[j] - shared.bias[j];
-        shifts.push_back(fmt::format("{} {:+.3g} % (standard error {:.2g} %)", name, 100.0 * shared.bias[j] / machine, 100.0 * shared.standard_error[j] / machine));
-        corrected.push_back(fmt::format("{} {:.6g}", name, value));
+        corrected.push_back(fmt::format("{} {:.6g}", recommended.names[static_cast<std::size_t>(j)], value));
     }
     return fmt::format("The logged current and voltage share noise (a current loop answers the current sensors' noise within its control "
                        "period, and a noisy current enters R i, omega L i and the effects' laws): measured in {} steady window{}, it reads "

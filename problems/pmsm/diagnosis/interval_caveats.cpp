@@ -31,7 +31,7 @@ const PathStep* reduced_step_of(const Diagnosis& d, const EffectTerm& term) {
 // whose mean current is smallest, its mean |i| and the mean distance of the flux from that line
 // there (Wb). A flux harmonic averages out over a segment; saturation does not.
 struct NearestBend {
-    std::size_t segment = 0;
+    std::string label;  // the segment's
     double current = 0.0, distance = 0.0;
 };
 NearestBend nearest_bend(const Measurement& data, const ModelFit& fit) {
@@ -59,7 +59,8 @@ NearestBend nearest_bend(const Measurement& data, const ModelFit& fit) {
         const double rows = static_cast<double>(ranges[r].rows);
         if (current[r] / rows < smallest) {
             smallest = current[r] / rows;
-            out = {r, smallest, std::hypot(bend_d[r], bend_q[r]) / rows};
+            out = {data.has_segments() ? data.segment_labels[static_cast<std::size_t>(data.segment[ranges[r].first])] : std::string("all rows"),
+                   smallest, std::hypot(bend_d[r], bend_q[r]) / rows};
         }
     }
     return out;
@@ -96,14 +97,11 @@ std::vector<IntervalCaveat> interval_caveats(const Measurement& data, const Diag
         const bool bent = bend.distance > 1e-6 * std::abs(recommended.values[3]);
         const double half_width = bent ? 0.5 * (with_intervals().upper[3] - with_intervals().lower[3]) : 0.0;
         if (bent && std::isfinite(half_width) && bend.distance > half_width) {
-            const auto ranges = segment_ranges(data);
-            const std::string label = data.has_segments() ? data.segment_labels[static_cast<std::size_t>(data.segment[ranges[bend.segment].first])]
-                                                          : std::string("all rows");
             out.push_back({fmt::format("its L_d, L_q and psi_f are the values at zero current, and already at the logged operating point "
                                        "nearest it ({}, mean |i| {:.3g} A) its flux linkage lies {:.3g} mWb off the line they draw, more than "
                                        "psi_f's interval (+-{:.3g} mWb): below the logged currents they are its laws' extrapolation, which "
                                        "the intervals of Ld, Lq and psi_f take as exact",
-                                       label, bend.current, 1e3 * bend.distance, 1e3 * half_width),
+                                       bend.label, bend.current, 1e3 * bend.distance, 1e3 * half_width),
                            {false, true, true, true}});
         }
     }

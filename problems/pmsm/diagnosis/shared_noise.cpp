@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <fmt/format.h>
 
 #include "problems/pmsm/diagnosis/noise.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
@@ -25,13 +26,23 @@ std::pair<double, double> SharedNoise::corrected_interval(const ModelFit& fit, E
     return {mid - widened, mid + widened};
 }
 
+std::vector<std::string> SharedNoise::shift_texts(const ModelFit& fit) const {
+    std::vector<std::string> out;
+    for (Eigen::Index j = 0; j < 4; ++j) {
+        const double machine = fit.values[j] - bias[j];
+        out.push_back(fmt::format("{} {:+.3g} % (standard error {:.2g} %)", fit.names[static_cast<std::size_t>(j)], 100.0 * bias[j] / machine,
+                                  100.0 * standard_error[j] / machine));
+    }
+    return out;
+}
+
 std::optional<SharedNoise> shared_noise_bias(const Measurement& data, const ModelFit& fit) {
     const WindowAngles angles(data);
     if (!angles.available()) return std::nullopt;
     const Eigen::Index n = data.size();
-    Eigen::VectorXd storage;
-    const Eigen::VectorXd& residual = residual_of(data, fit, storage);
-    Eigen::VectorXd projected = &residual == &storage ? std::move(storage) : residual;
+    // One model serves the residual (unless the fit kept it) and the Jacobian.
+    const auto model = make_model(fit.spec, data);
+    Eigen::VectorXd projected = fit.residual.size() == 2 * n ? fit.residual : residual_stacked(*model, fit.values);
     std::vector<Eigen::Index> starts, sizes;
     std::vector<bool> measured;
     // The projection takes its parameters' share of the noise with it: of m rows' noise, m - spent
@@ -57,7 +68,6 @@ std::optional<SharedNoise> shared_noise_bias(const Measurement& data, const Mode
         if (fit.free[static_cast<std::size_t>(j)]) columns.push_back(j);
     const auto p = static_cast<Eigen::Index>(columns.size());
     if (p == 0) return std::nullopt;
-    const auto model = make_model(fit.spec, data);
     const RangeNormalEquations sums = range_normal_equations(*model, fit.values, columns, starts, &projected);
     Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(p, p);
     Eigen::VectorXd moment = Eigen::VectorXd::Zero(p);

@@ -143,10 +143,7 @@ double held_bias(const SampleAndHold* held, Eigen::Index j) { return held && hel
 }  // namespace
 
 std::string shared_noise_text(const ModelFit& fit, const SharedNoise& shared, const SampleAndHold* held) {
-    std::vector<std::string> shifts;
-    for (Eigen::Index j = 0; j < 4; ++j)
-        shifts.push_back(fmt::format("{} {:+.3g} % (standard error {:.2g} %)", fit.names[static_cast<std::size_t>(j)],
-                                     100.0 * shared.bias[j] / (fit.values[j] - shared.bias[j]), 100.0 * shared.standard_error[j] / (fit.values[j] - shared.bias[j])));
+    const std::vector<std::string> shifts = shared.shift_texts(fit);
     std::string t = fmt::format(
         "\nnoise the current and the voltage share (a current loop answers the current sensors' noise within its control period, and a "
         "noisy current enters R i, omega L i and the effects' laws): measured in {} steady window{}, it makes the model read {} off the "
