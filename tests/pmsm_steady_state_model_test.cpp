@@ -295,7 +295,13 @@ TEST_CASE("a search on a subsample finds the optimum a search on all rows finds"
         const auto sampled = fit_model(data, parse_model_spec("base+" + c.effect), options);
         CHECK(sampled.method.find("on 200 of the") != std::string::npos);
         CHECK(everywhere.method.find("of the") == std::string::npos);
-        for (Eigen::Index j = 0; j < sampled.values.size(); ++j) CHECK(sampled.values[j] == Approx(everywhere.values[j]).epsilon(1e-6));
+        // Where the model is exact the optimum is sharp and both polishes end on it to 1e-6. The dead
+        // time's is flat (the steady-state model misses the ripple its harmonics drive, 6.8 mV rms
+        // here): measured 2026-11-27, the two ends differ by 2.7e-6 in the voltage and 4e-9 in the
+        // sum of squares, so that is what "the same optimum" can mean there.
+        const double tolerance = c.exact ? 1e-6 : 1e-5;
+        for (Eigen::Index j = 0; j < sampled.values.size(); ++j) CHECK(sampled.values[j] == Approx(everywhere.values[j]).epsilon(tolerance));
+        CHECK(sampled.rss() == Approx(everywhere.rss()).epsilon(1e-7));
         const auto truth = make_effect(c.effect, c.values);
         if (c.exact)
             for (Eigen::Index j = 0; j < truth->values().size(); ++j) CHECK(sampled.values[4 + j] == Approx(truth->values()[j]).epsilon(1e-6));

@@ -238,8 +238,9 @@ Recommendation recommend(const ModelSpec& spec, const SetSearch& search, const P
     // An addition that makes the set implausible does not undo the set it was added to: the
     // latest plausible set before a run of implausible additions is judged instead (an effect
     // added at the noise floor to take a sliver, with values no machine has, seen on the 5 kW raw
-    // logs' flux harmonics and the 100 kW dead time with winding heating). Not across pruning,
-    // which already judged the larger sets.
+    // logs' flux harmonics and, while the dead-time band was linear, the 100 kW dead time with
+    // winding heating; tests/pmsm_diagnosis_stages_test.cpp). Not across pruning, which already
+    // judged the larger sets.
     r.step = trace.path.size() - 1;
     while (r.step > 1 && !trace.path[r.step].plausible && trace.path[r.step].kind == StepKind::Added && search.tie.empty()) --r.step;
     if (!trace.path[r.step].plausible) r.step = trace.path.size() - 1;

@@ -1,7 +1,10 @@
 // Inverter dead time and device voltage drop. Each phase loses V_dt in the direction of its current,
-// V_dt = t_dead f_sw V_dc + V_device; near zero current the loss is taken as linear over a band
-// (the current ripple and snubber charge make it so). In dq this is (4/pi) V_dt i/|i| plus a 6 omega
-// ripple: an "extra resistance" that is largest at small current.
+// V_dt = t_dead f_sw V_dc + V_device; near zero current the loss turns over a band, i / sqrt(i^2 + b^2):
+// each leg's loss follows the current at its switching edges, which the carrier's ripple moves off
+// the sampled current by an amount that changes with the duty cycles, so over a drive's operating
+// points the turn is soft with a slow tail (docs/effects.md, "deadtime", measured against a linear
+// band and tanh). In dq this is (4/pi) V_dt i/|i| plus a 6 omega ripple: an "extra resistance" that
+// is largest at small current.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -31,9 +34,9 @@ public:
     }
 
 private:
-    // A phase current's direction, linear through zero over the band.
+    // A phase current's direction, turning through zero over the band.
     double sign(double i) const {
-        if (band_ > 0.0) return std::clamp(i * per_ampere_, -1.0, 1.0);
+        if (band_ > 0.0) { const double x = i * per_ampere_; return x / std::sqrt(1.0 + x * x); }
         return i > 0.0 ? 1.0 : (i < 0.0 ? -1.0 : 0.0);
     }
 
@@ -113,7 +116,7 @@ const bool registered = register_effect({
     "Inverter dead time and device drop: each phase loses V_dt against its current",
     {ParameterSpec::real("voltage", 0.28, 0.0, 10.0, "per-phase voltage error t_dead f_sw V_dc + V_device", "V"),
      ParameterSpec::real("current_band", 0.0, 0.0, 10.0,
-                         "phase current over which the error ramps linearly through zero (0: a sign)", "A")},
+                         "phase current at which the error is 1/sqrt(2) of V_dt: it turns as i/sqrt(i^2+b^2) (0: a sign)", "A")},
     [](const ParameterSet& p) { return std::make_unique<DeadTime>(p); },
 });
 
