@@ -312,14 +312,13 @@ std::string sample_and_hold_finding(const Diagnosis& d) {
         return fmt::format("The stated control period ({}) is not corrected for: the recommended model's Rs, Ld or Lq is not positive.",
                            timing_text(held.timing));
     std::vector<std::string> corrected;
-    for (Eigen::Index j = 0; j < 4; ++j) {
-        const double value = recommended.values[j] - held.bias[j];
-        corrected.push_back(fmt::format("{} {:.6g} ({:+.3g} %)", recommended.names[static_cast<std::size_t>(j)], value, -100.0 * held.bias[j] / value));
-    }
+    for (Eigen::Index j = 0; j < 4; ++j)
+        corrected.push_back(fmt::format("{} {:.6g}", recommended.names[static_cast<std::size_t>(j)], recommended.values[j] - held.bias[j]));
     return fmt::format("The stated control period ({}) samples the currents once a period and holds the voltage computed from them over "
-                       "the next{}: the continuous model's base parameters read off the machine's by that, and corrected for it they are {} "
+                       "the next{}: it reads the continuous model's base parameters {} off the machine's; corrected for it they are {} "
                        "(`mhbench fit --control-period` gives the corrected intervals; docs/diagnosis.md).",
-                       timing_text(held.timing), held.timing.carrier() ? ", switched by the carrier" : "", fmt::join(corrected, ", "));
+                       timing_text(held.timing), held.timing.carrier() ? ", switched by the carrier" : "",
+                       fmt::join(shift_texts(held, recommended.names, recommended.values), ", "), fmt::join(corrected, ", "));
 }
 
 // The noise the current and the voltage share, on the recommended model's base parameters.

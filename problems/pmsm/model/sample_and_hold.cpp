@@ -122,6 +122,13 @@ std::string timing_text(const DriveTiming& timing) {
     return t;
 }
 
+std::vector<std::string> shift_texts(const SampleAndHold& held, const std::vector<std::string>& names, const Eigen::VectorXd& fitted) {
+    std::vector<std::string> out;
+    for (Eigen::Index j = 0; j < 4; ++j)
+        out.push_back(fmt::format("{} {:+.3g} %", names[static_cast<std::size_t>(j)], 100.0 * held.bias[j] / (fitted[j] - held.bias[j])));
+    return out;
+}
+
 std::complex<double> held_voltage(const Eigen::Vector4d& base, double omega, std::complex<double> current, double period) {
     const Matrix5 e = (circuit(base, omega) * period).exp();
     // Steady state: the flux at the period's end, in the rotor frame, is the one at its start.

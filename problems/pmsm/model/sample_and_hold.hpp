@@ -10,6 +10,7 @@
 // control period the user states.
 #include <complex>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -42,6 +43,10 @@ struct SampleAndHold {
 std::string timing_problem(const DriveTiming& timing);
 // "100 µs" or "100 µs, carrier 10 kHz from 28 V".
 std::string timing_text(const DriveTiming& timing);
+// "Rs +0.113 %" for each base parameter: how far `fitted` (named `names`) reads off the machine's by
+// the sample and hold, in per cent of the machine's value: the sign convention of the shared noise's
+// statement (SharedNoise::shift_texts), so that the two read alike side by side.
+std::vector<std::string> shift_texts(const SampleAndHold& held, const std::vector<std::string>& names, const Eigen::VectorXd& fitted);
 
 // The same with the inverter's legs switched by a centred carrier of `timing.carrier_frequency` from
 // `timing.dc_voltage`, the duties from the phase references with the min-max zero sequence, and the

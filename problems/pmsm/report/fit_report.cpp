@@ -96,13 +96,11 @@ std::string sample_and_hold_text(const ModelFit& fit, const SampleAndHold& held)
     if (!held.bias.allFinite())
         return fmt::format("\nsample and hold of the stated control period ({}): not corrected, the fitted Rs, Ld or Lq is not positive\n",
                            timing_text(held.timing));
-    std::vector<std::string> shifts;
-    for (Eigen::Index j = 0; j < 4; ++j)
-        shifts.push_back(fmt::format("{} {:+.3g} %", fit.names[static_cast<std::size_t>(j)], 100.0 * held.bias[j] / (fit.values[j] - held.bias[j])));
     std::string t = fmt::format(
         "\nsample and hold of the stated control period ({}): a drive that samples the currents once a period and holds the voltage it "
-        "computes over the next{} makes the continuous model read {} above the machine (docs/diagnosis.md); corrected:\n",
-        timing_text(held.timing), held.timing.carrier() ? ", switching it by the carrier," : "", fmt::join(shifts, ", "));
+        "computes over the next{} makes the continuous model read {} off the machine (docs/diagnosis.md); corrected:\n",
+        timing_text(held.timing), held.timing.carrier() ? ", switching it by the carrier," : "",
+        fmt::join(shift_texts(held, fit.names, fit.values), ", "));
     for (Eigen::Index j = 0; j < 4; ++j) {
         const auto k = static_cast<std::size_t>(j);
         const std::string interval = !fit.free[k] ? "fixed"
