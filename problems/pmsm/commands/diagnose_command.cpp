@@ -39,6 +39,7 @@ const bool registered = register_command("diagnose", [](CLI::App& app) {
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
+        pmsm::state_current_loop(data, o->timing);
         // The diagnosis compares many fits of the steady model; the dynamic model is fitted by `fit` only
         // so far, so `auto` states its choice and falls back.
         const auto kind = pmsm::parse_model_kind(o->model_kind);

@@ -29,6 +29,7 @@ const bool registered = register_command("fit", [](CLI::App& app) {
         const auto columns = column_map_option(*o);
         const auto threads = thread_limit(*o);
         auto data = read_data_option(*o, columns);
+        pmsm::state_current_loop(data, o->timing);
         auto kind = pmsm::parse_model_kind(o->model_kind);
         if (kind == pmsm::ModelKind::Auto) {
             const auto choice = pmsm::choose_model_kind(data, spec);

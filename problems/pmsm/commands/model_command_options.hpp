@@ -84,6 +84,10 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
                     "ripple the correction then includes")
         ->check(number_in(0.0, 1e7));
     cmd->add_option("--dc-voltage", o.timing.dc_voltage, "with --carrier-frequency: the inverter's DC link voltage (V)")->check(number_in(0.0, 1e6));
+    cmd->add_option("--current-bandwidth", o.timing.current_bandwidth,
+                    "with --control-period: the current loop's closed-loop bandwidth (Hz); the angle harmonics of dead time and flux "
+                    "harmonics then reach the logged voltage through the loop, as they do on a drive (docs/diagnosis.md, section 8)")
+        ->check(number_in(0.0, 1e6));
     cmd->add_option("--json", o.json, json_help);
 }
 
@@ -92,6 +96,7 @@ inline std::string timing_options_text(const ModelCommandOptions& o) {
     if (!(o.timing.control_period > 0.0)) return {};
     std::string out = fmt::format(" --control-period {:g}", o.timing.control_period);
     if (o.timing.carrier()) out += fmt::format(" --carrier-frequency {:g} --dc-voltage {:g}", o.timing.carrier_frequency, o.timing.dc_voltage);
+    if (o.timing.current_bandwidth > 0.0) out += fmt::format(" --current-bandwidth {:g}", o.timing.current_bandwidth);
     return out;
 }
 
@@ -103,7 +108,11 @@ inline void check_timing_options(const ModelCommandOptions& o, bool dynamic) {
         throw InputError("command line", 0, "--control-period",
                          "the sample-and-hold correction is for the steady-state model; leave --control-period out with --model-kind dynamic");
     if (const auto problem = pmsm::timing_problem(t); !problem.empty())
-        throw InputError("command line", 0, problem.rfind("dc voltage", 0) == 0 ? "--dc-voltage" : "--carrier-frequency", problem);
+        throw InputError("command line", 0,
+                         problem.rfind("dc voltage", 0) == 0          ? "--dc-voltage"
+                         : problem.rfind("current bandwidth", 0) == 0 ? "--current-bandwidth"
+                                                                       : "--carrier-frequency",
+                         problem);
 }
 
 // The fit settings of the options.

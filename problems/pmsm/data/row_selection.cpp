@@ -59,6 +59,8 @@ Measurement select_rows(const Measurement& m, const std::vector<Eigen::Index>& r
     Measurement out;
     out.source = m.source;
     out.warnings = m.warnings;
+    out.current_loop_bandwidth = m.current_loop_bandwidth;
+    out.current_loop_delay = m.current_loop_delay;
     pick_rows(m, out, rows);
     return out;
 }

@@ -13,6 +13,8 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     Diagnosis out;
     out.source = data.source;
     out.samples = data.size();
+    out.current_loop_bandwidth = data.current_loop_bandwidth;
+    out.current_loop_delay = data.current_loop_delay;
     if (data.t) out.columns.push_back("t");
     if (data.has_segments()) out.columns.push_back("segment");
     if (data.theta_e) out.columns.push_back("theta_e");

@@ -290,6 +290,7 @@ struct IntervalCaveat {
 struct Diagnosis {
     std::string source;
     Eigen::Index samples = 0;
+    double current_loop_bandwidth = 0.0, current_loop_delay = 0.0;  // as the data state them (Measurement)
     std::vector<std::string> columns;  // optional columns present
     ModelFit model;
     std::vector<ModelFit> build_up;    // the model's prefixes: base, base+A, ... up to the model (one entry when it is base)

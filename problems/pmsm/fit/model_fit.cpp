@@ -897,6 +897,13 @@ Measurement model_rows(const SteadyStateModel& model, const std::vector<Eigen::I
     const Measurement& data = model.data();
     Measurement out;
     out.source = data.source;
+    out.current_loop_bandwidth = data.current_loop_bandwidth;
+    out.current_loop_delay = data.current_loop_delay;
+    // A stated loop takes each operating point's mean state from the rows of its segment.
+    if (data.current_loop_bandwidth > 0.0 && data.has_segments()) {
+        out.segment = data.segment(rows);
+        out.segment_labels = data.segment_labels;
+    }
     out.i_d = data.i_d(rows);
     out.i_q = data.i_q(rows);
     out.u_d = data.u_d(rows);

@@ -102,8 +102,22 @@ Eigen::Vector2d switched_end_flux(const Matrix5& a, const Eigen::Vector2d& psi, 
 
 }  // namespace
 
+void state_current_loop(Measurement& data, const DriveTiming& timing) {
+    if (!(timing.current_bandwidth > 0.0)) return;
+    data.current_loop_bandwidth = timing.current_bandwidth;
+    data.current_loop_delay = 1.5 * timing.control_period;
+}
+
+std::string current_loop_text(double bandwidth, double delay) {
+    if (!(bandwidth > 0.0)) return {};
+    return fmt::format("current loop: {:g} Hz, its delay {:g} µs (dead time's and flux harmonics' angle harmonics reach the logged voltage "
+                       "through it; docs/diagnosis.md, section 8)\n",
+                       bandwidth, 1e6 * delay);
+}
+
 std::string timing_problem(const DriveTiming& timing) {
     if (!(timing.control_period > 0.0)) {
+        if (timing.current_bandwidth > 0.0) return "current bandwidth: needs the control period as well";
         if (timing.carrier()) return "carrier frequency: needs the control period as well";
         return timing.dc_voltage > 0.0 ? "dc voltage: needs the control period as well" : "";
     }

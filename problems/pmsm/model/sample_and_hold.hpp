@@ -29,8 +29,16 @@ struct DriveTiming {
     double control_period = 0.0;     // s: currents sampled and the voltage updated once a period
     double carrier_frequency = 0.0;  // Hz, a whole number of carrier periods per control period (0: not stated)
     double dc_voltage = 0.0;         // V, the DC link (with the carrier)
+    double current_bandwidth = 0.0;  // Hz, the current loop's closed-loop bandwidth (0: not stated)
     bool carrier() const { return carrier_frequency > 0.0; }
 };
+
+// Tells `data` the drive's current loop when `timing` states its bandwidth: the models of the data
+// then pass their effects' angle harmonics through it (loop_response, model/steady_state_model.hpp),
+// the loop's delay taken as 1.5 control periods (a period to compute, half a period of holding).
+void state_current_loop(Measurement& data, const DriveTiming& timing);
+// "current loop: 400 Hz, its delay 187.5 µs (...)" and a newline, for a stated loop; empty otherwise.
+std::string current_loop_text(double bandwidth, double delay);
 
 // What a stated timing does to a fit's base parameters.
 struct SampleAndHold {

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <map>
 #include <mutex>
+#include <numbers>
 #include <tuple>
 
 #include <tbb/blocked_range.h>
@@ -92,6 +94,15 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
           return b;
       }) {
     tables_ = SharedTables::of(data_);
+    loop_alpha_ = 2.0 * std::numbers::pi * data_.current_loop_bandwidth;
+    for (const auto& e : effects_) {
+        std::vector<int> orders = e->angle_orders();
+        std::sort(orders.begin(), orders.end());
+        // Successive products reach every order only when each is a multiple of the first.
+        const bool declared = !orders.empty() && orders != Effect::every_angle_order() && orders.front() > 0 &&
+                              std::all_of(orders.begin(), orders.end(), [&](int m) { return m % orders.front() == 0; });
+        loop_orders_.push_back(loop_alpha_ > 0.0 && data_.theta_e && declared ? std::move(orders) : std::vector<int>{});
+    }
     const OperatingScale scale = tables_->scale;
     const Bounds base = base_parameter_bounds();
     std::vector<double> lower(base.lower.data(), base.lower.data() + 4), upper(base.upper.data(), base.upper.data() + 4);
@@ -172,37 +183,140 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
     if (reads_temp_magnet_) s.temp_magnet = data_.temp_magnet->segment(first, n).array();
 }
 
-void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const {
+std::complex<double> loop_response(double alpha, double delay, double omega, double omega_h) {
+    using namespace std::complex_literals;
+    const std::complex<double> a = alpha - 1i * omega;
+    return a / (a * std::exp(-1i * omega_h * delay) + 1i * (omega_h + omega));
+}
+
+void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, const double* p, ModelState& s, Eigen::Index first) const {
+    const Effect& e = *effects_[effect];
+    // Each row takes its own value of the law; what the loop changes, the law's harmonics, is taken at
+    // the mean state of the row's operating point within the block (a run of one segment), so that
+    // the noise of the row's current does not enter it.
+    struct Grid {
+        std::vector<int> declared;         // the effect's orders (loop_orders_)
+        std::vector<int> orders;           // m = +order and -order for each of them
+        ModelState state;                  // a turn of the angle at an operating point's mean state
+        Eigen::ArrayXcd turns;             // e^{-j m theta_k}, points x orders, column-major
+        Eigen::ArrayXcd change;            // (G - 1) times the law's coefficient of each m
+    };
+    // One grid per set of orders a thread meets (dead time's, a flux harmonic's), made once.
+    thread_local std::vector<Grid> grids;
+    const std::vector<int>& declared = loop_orders_[effect];
+    auto found = std::find_if(grids.begin(), grids.end(), [&](const Grid& g) { return g.declared == declared; });
+    const bool known = found != grids.end();
+    Grid& grid = known ? *found : grids.emplace_back();
+    const Eigen::Index points = 2 * declared.back() + 8;
+    ModelState& g = grid.state;
+    if (!known) {
+        grid.declared = declared;
+        for (const int order : declared) grid.orders.insert(grid.orders.end(), {order, -order});
+    }
+    const std::vector<int>& orders = grid.orders;
+    const auto count = static_cast<Eigen::Index>(orders.size());
+    if (!known) {
+        g.resize(points);
+        g.theta.resize(points);
+        g.cos_theta.resize(points);
+        g.sin_theta.resize(points);
+        grid.turns.resize(points * count);
+        for (Eigen::Index k = 0; k < points; ++k) {
+            g.theta[k] = 2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(points);
+            g.cos_theta[k] = std::cos(g.theta[k]);
+            g.sin_theta[k] = std::sin(g.theta[k]);
+            for (Eigen::Index j = 0; j < count; ++j)
+                grid.turns[j * points + k] = std::polar(1.0, -static_cast<double>(orders[static_cast<std::size_t>(j)]) * g.theta[k]);
+        }
+        grid.change.resize(count);
+    }
+    e.model(which, p, s);
+    g.ld = s.ld;
+    g.lq = s.lq;
+    const Eigen::Index n = s.size();
+    for (Eigen::Index begin = 0; begin < n;) {
+        Eigen::Index end = begin + 1;
+        if (data_.has_segments())
+            while (end < n && data_.segment[first + end] == data_.segment[first + begin]) ++end;
+        else
+            end = n;
+        const Eigen::Index rows = end - begin;
+        auto mean = [&](const Eigen::ArrayXd& a) { return a.segment(begin, rows).mean(); };
+        const double omega = mean(s.omega);
+        g.i_d.setConstant(mean(s.i_d));
+        g.i_q.setConstant(mean(s.i_q));
+        g.omega.setConstant(omega);
+        g.rs.setConstant(mean(s.rs));
+        g.psi_f.setConstant(mean(s.psi_f));
+        g.psi_d.setConstant(mean(s.psi_d));
+        g.psi_q.setConstant(mean(s.psi_q));
+        if (s.temp_winding.size() > 0) g.temp_winding.setConstant(points, mean(s.temp_winding));
+        else g.temp_winding.resize(0);
+        if (s.temp_magnet.size() > 0) g.temp_magnet.setConstant(points, mean(s.temp_magnet));
+        else g.temp_magnet.resize(0);
+        g.u_d.setZero();
+        g.u_q.setZero();
+        e.model(which, p, g);
+        // Each harmonic m of the law's voltage at that state, times the loop's response less one:
+        // what the steady law says and the logged reference does not hold.
+        for (Eigen::Index j = 0; j < count; ++j) {
+            std::complex<double> c = 0.0;
+            for (Eigen::Index k = 0; k < points; ++k) c += std::complex<double>(g.u_d[k], g.u_q[k]) * grid.turns[j * points + k];
+            const double m = static_cast<double>(orders[static_cast<std::size_t>(j)]);
+            grid.change[j] = (loop_response(loop_alpha_, data_.current_loop_delay, omega, m * omega) - 1.0) * c / static_cast<double>(points);
+        }
+        // The orders are multiples of the first (ascending, loop_orders_): e^{j m theta} by successive
+        // products of e^{j step theta} rather than a power per order and row.
+        const int step = declared.front();
+        for (Eigen::Index r = begin; r < end; ++r) {
+            const std::complex<double> base = std::pow(std::complex<double>(s.cos_theta[r], s.sin_theta[r]), step);
+            std::complex<double> turn = 1.0, v = 0.0;
+            int at = 0;
+            for (Eigen::Index j = 0; j < count; j += 2) {
+                // e^{j m theta} and its conjugate for the pair +m, -m.
+                for (const int m = orders[static_cast<std::size_t>(j)]; at < m; at += step) turn *= base;
+                v += grid.change[j] * turn + grid.change[j + 1] * std::conj(turn);
+            }
+            s.u_d[r] += v.real();
+            s.u_q[r] += v.imag();
+        }
+        begin = end;
+    }
+}
+
+void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane, Eigen::Index first) const {
     if (!acts_in(stages_, which)) return;
     for (std::size_t k = 0; k < effects_.size(); ++k) {
         const Effect& e = *effects_[k];
         if (!acts_in(e.model_stages(), which)) continue;
         if (base_lane && e.model_base_dependence(which) == BaseDependence::Additive) continue;
-        e.model(which, p + offsets_[k], s);
+        if (!loop_orders_[k].empty() && (which == ModelStage::MachineVoltage || which == ModelStage::InverterError))
+            run_through_loop(k, which, p + offsets_[k], s, first);
+        else e.model(which, p + offsets_[k], s);
     }
 }
 
-void SteadyStateModel::from_base(const double* p, ModelState& s, bool base_lane) const {
+void SteadyStateModel::from_base(const double* p, ModelState& s, bool base_lane, Eigen::Index first) const {
     s.rs.setConstant(p[0]);
     s.psi_f.setConstant(p[3]);
-    run_stage(ModelStage::Coefficients, p, s, base_lane);
+    run_stage(ModelStage::Coefficients, p, s, base_lane, first);
     s.ld = p[1];
     s.lq = p[2];
     s.psi_d = p[1] * s.i_d + s.psi_f;
     s.psi_q = p[2] * s.i_q;
-    run_stage(ModelStage::FluxLinkage, p, s, base_lane);
+    run_stage(ModelStage::FluxLinkage, p, s, base_lane, first);
     s.u_d = s.rs * s.i_d - s.omega * s.psi_q;
     s.u_q = s.rs * s.i_q + s.omega * s.psi_d;
     for (auto stage : {ModelStage::MachineVoltage, ModelStage::CurrentRipple, ModelStage::InverterError, ModelStage::ControllerFrame,
                        ModelStage::Delay, ModelStage::LoggedVoltage})
-        run_stage(stage, p, s, base_lane);
+        run_stage(stage, p, s, base_lane, first);
 }
 
 void SteadyStateModel::predict(const double* p, ModelState& s, Eigen::Index first) const {
     load(s, first);
-    run_stage(ModelStage::SensorCurrents, p, s, false);
-    run_stage(ModelStage::SensorAngle, p, s, false);
-    from_base(p, s, false);
+    run_stage(ModelStage::SensorCurrents, p, s, false, first);
+    run_stage(ModelStage::SensorAngle, p, s, false, first);
+    from_base(p, s, false, first);
 }
 
 void SteadyStateModel::predict_rows(const double* p, double* u_d, double* u_q) const {
@@ -221,8 +335,8 @@ void SteadyStateModel::predict_rows(const double* p, double* u_d, double* u_q) c
 void SteadyStateModel::predict_affine(const double* p, AffinePrediction& out, Eigen::Index first) const {
     ModelState& in = out.inputs;
     load(in, first);
-    run_stage(ModelStage::SensorCurrents, p, in, false);
-    run_stage(ModelStage::SensorAngle, p, in, false);
+    run_stage(ModelStage::SensorCurrents, p, in, false, first);
+    run_stage(ModelStage::SensorAngle, p, in, false, first);
     // Later stages may change the currents and the angle too, so each run starts from the inputs.
     auto restart = [&](ModelState& s) {
         s.i_d = in.i_d;
@@ -239,21 +353,21 @@ void SteadyStateModel::predict_affine(const double* p, AffinePrediction& out, Ei
     ModelState& s = out.lane;
     q.head<4>().setZero();
     restart(s);
-    from_base(q.data(), s, false);
+    from_base(q.data(), s, false, first);
     out.offset_d = s.u_d;
     out.offset_q = s.u_q;
     for (int j = 0; j < 4; ++j) {
         q.head<4>().setZero();
         q[j] = 1.0;
         restart(s);
-        from_base(q.data(), s, true);
+        from_base(q.data(), s, true, first);
         out.phi_d.col(j) = s.u_d;
         out.phi_q.col(j) = s.u_q;
     }
     if (!affine_effects_) return;
     q.head<4>().setZero();
     restart(s);
-    from_base(q.data(), s, true);
+    from_base(q.data(), s, true, first);
     for (int j = 0; j < 4; ++j) {
         out.phi_d.col(j) -= s.u_d;
         out.phi_q.col(j) -= s.u_q;

@@ -4,6 +4,7 @@
 // with any chosen effects applied stage by stage (effects/effect.hpp). Parameters are the four base
 // parameters followed by each effect's real parameters in declaration order.
 #include <algorithm>
+#include <complex>
 #include <memory>
 #include <optional>
 #include <string>
@@ -40,6 +41,14 @@ struct AffinePrediction {
 
     Eigen::Index rows() const { return offset_d.size(); }
 };
+
+// How much of a harmonic of the voltage a machine needs, turning at `omega_h` (rad/s, signed) in the
+// rotor frame at electrical speed `omega`, the current loop puts into its logged reference, the rest
+// being left in the current: G = (alpha - j omega) / ((alpha - j omega) e^{-j omega_h delay} +
+// j (omega_h + omega)), for an IMC-tuned PI loop of bandwidth alpha (rad/s) with its feed-forward of
+// j omega L i on the measured current, the plant's resistance neglected beside omega_h L
+// (docs/diagnosis.md, section 8). 1 at omega_h = omega = 0.
+std::complex<double> loop_response(double alpha, double delay, double omega, double omega_h);
 
 class SteadyStateModel {
 public:
@@ -124,9 +133,14 @@ public:
 private:
     SteadyStateModel(std::optional<Measurement> owned, const Measurement* view, std::vector<std::unique_ptr<Effect>> effects);
     void load(ModelState& s, Eigen::Index first) const;
-    void run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane) const;
+    // Rows [first, first + s.size()) of the data are in s.
+    void run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane, Eigen::Index first) const;
     // Coefficients onward, from base parameters p[0..3].
-    void from_base(const double* p, ModelState& s, bool base_lane) const;
+    void from_base(const double* p, ModelState& s, bool base_lane, Eigen::Index first) const;
+    // Runs effect k at this stage as the logged reference sees it: its harmonics, taken at each
+    // operating point's mean state over a turn of the angle, scaled by the loop's response
+    // (loop_response).
+    void run_through_loop(std::size_t k, ModelStage which, const double* p, ModelState& s, Eigen::Index first) const;
 
     std::optional<Measurement> owned_;
     const Measurement& data_;
@@ -142,6 +156,11 @@ private:
     Bounds bounds_, plausible_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
+    double loop_alpha_ = 0.0;  // rad/s: 2 pi times the stated current-loop bandwidth (0: none stated)
+    // Per effect, the harmonic orders of the angle whose voltage goes through the stated loop: those
+    // it declares, when the log states the loop and the angle; empty otherwise, and for an effect that
+    // declares none or every order (it does not say which).
+    std::vector<std::vector<int>> loop_orders_;
     // Temperatures are copied into a block's state only for an effect that lists them
     // (Effect::model_columns): each pass over a long log reads every column it loads from memory.
     bool reads_temp_winding_ = false, reads_temp_magnet_ = false;

@@ -53,6 +53,7 @@ json lack_of_fit_json(const LackOfFit& l) {
 json diagnosis_json(const Diagnosis& d) {
     json out = fit_json(d.model);
     out["data"] = d.source;
+    if (d.current_loop_bandwidth > 0.0) out["current_loop"] = {{"bandwidth", d.current_loop_bandwidth}, {"delay", d.current_loop_delay}};
     out["columns"] = d.columns;
     out["missing_effect_found"] = d.missing_effect_found;
     out["winner"] = d.winner ? json(*d.winner) : json(nullptr);

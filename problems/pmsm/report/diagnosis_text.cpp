@@ -34,8 +34,9 @@ std::string noise_from_data_text(const NoiseEstimate& n) {
 }
 
 std::string diagnosis_text(const Diagnosis& d) {
-    std::string t = fmt::format("data: {} ({} samples in {} segments)\nmodel: {}: residual rms u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n\n",
-                                d.source, d.samples, d.segments.size(), d.model.spec.text(), d.model.rms.d, d.model.rms.q, d.model.rms.total);
+    std::string t = fmt::format("data: {} ({} samples in {} segments)\n{}model: {}: residual rms u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n\n",
+                                d.source, d.samples, d.segments.size(), current_loop_text(d.current_loop_bandwidth, d.current_loop_delay),
+                                d.model.spec.text(), d.model.rms.d, d.model.rms.q, d.model.rms.total);
     t += fmt::format("{:<4} {:<16} {:<17} {:>12} {:>11} {:>12} {}\n", "rank", "added effect", "verdict", "rms after (V)", "dBIC", "LOSO (V)",
                      "identifiability");
     for (std::size_t k = 0; k < d.candidates.size(); ++k) {

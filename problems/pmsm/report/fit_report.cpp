@@ -71,6 +71,7 @@ json fit_json(const ModelFit& fit) {
 std::string fit_text(const ModelFit& fit, const Measurement& data) {
     std::string t = fmt::format("data: {} ({} samples{})\n", data.source, data.size(),
                                 data.has_segments() ? fmt::format(" in {} segments", data.segment_labels.size()) : std::string());
+    t += current_loop_text(data.current_loop_bandwidth, data.current_loop_delay);
     t += fmt::format("model: {}\nfitted by {}\n\n", fit.spec.text(), fit.method);
     t += fmt::format("{:<28} {:>14} {:>36}  {}\n", "parameter", "value", "95 % interval", "unit");
     for (std::size_t j = 0; j < fit.names.size(); ++j) {
