@@ -186,7 +186,7 @@ StudySpec read_study(const std::filesystem::path& path) {
     } catch (const toml::parse_error& e) {
         throw InputError(file, static_cast<long>(e.source().begin.line), "", std::string(e.description()));
     }
-    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside", "together", "design", "profile_effects"};
+    static const std::set<std::string> allowed{"name", "description", "profile", "model", "seeds", "pairs", "triples", "output", "effect", "outside", "together", "design", "profile_effects", "current_loop"};
     for (auto&& [key, node] : root)
         if (!allowed.count(std::string(key.str())))
             throw InputError(file, line_of(node), std::string(key.str()),
@@ -289,6 +289,10 @@ StudySpec read_study(const std::filesystem::path& path) {
         }
         spec.outside.push_back(std::move(o));
     });
+    if (const auto* n = root.get("current_loop")) {
+        if (!n->is_boolean()) throw InputError(file, line_of(*n), "current_loop", "expects true or false");
+        spec.current_loop = n->as_boolean()->get();
+    }
     if (const auto* n = root.get("profile_effects")) {
         const auto* list = n->as_array();
         if (!list) throw InputError(file, line_of(*n), "profile_effects", "expects a list of effect names, e.g. [\"saturation\"]");
@@ -601,7 +605,12 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         // And the device plant's control period and carrier: it holds each voltage over a period and
         // switches it by the carrier, as a digital drive does (the averaged plant applies its voltage
         // continuously).
-        if (sim.device) drive_options.timing = DriveTiming{sim.control.control_period, sim.device->inverter.pwm_frequency, sim.control.dc_voltage};
+        // With `current_loop`, also the loop's bandwidth, through which the effects' angle harmonics reach the logged voltage.
+        if (sim.device) {
+            drive_options.timing = DriveTiming{sim.control.control_period, sim.device->inverter.pwm_frequency, sim.control.dc_voltage,
+                                               spec.current_loop ? sim.control.current_bandwidth : 0.0};
+            state_current_loop(result.data, drive_options.timing);
+        }
         const Diagnosis d = diagnose(result.data, model, drive_options);
         r.recommended = d.recommended.text();
         for (const auto& e : d.recommended.effects)
@@ -617,7 +626,8 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         for (const auto& l : d.detection_limits)
             if (std::find(r.missed.begin(), r.missed.end(), l.effect) != r.missed.end()) r.missed_limits.push_back(l);
         if (!c.pseudo_true_sized.empty()) {
-            const Measurement selected = points ? select_operating_points(Measurement(quiet_data()), *points) : quiet_data();
+            Measurement selected = points ? select_operating_points(Measurement(quiet_data()), *points) : quiet_data();
+            state_current_loop(selected, drive_options.timing);
             ModelSpec truth = model;
             for (const auto& e : c.truth)
                 if (!truth.contains(e)) truth = truth.with(e);
@@ -832,7 +842,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                   "saying \"not in the library\" and, when the study file names the mechanical order it leaves, naming that order). Rates with Wilson 95 % intervals; parameter errors: median over seeds of |fitted - "
                                   "true| / true of the recommended model's base parameters. Interval coverage: over the drives whose recommended model is "
                                   "correct, the share in which the 95 % interval of each base parameter (the recommended model polished with intervals) "
-                                  "holds the plant's value; at least 90 % is what a 95 % interval owes.{}{} \"Where no structure is left\": the same over the drives "
+                                  "holds the plant's value; at least 90 % is what a 95 % interval owes.{}{}{} \"Where no structure is left\": the same over the drives "
                                   "whose recommended model leaves no significant structure in the residual (segment means, angle harmonics). \"Correct or "
                                   "below the printed limit\": also counting a drive that added nothing false, did not say \"not in the library\" and missed only effects whose true size, as the "
                                   "study file states it (`clear_size`, `weak_size`), lies below the detection limit the diagnosis printed for them.",
@@ -842,6 +852,9 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                         "does, and the diagnosis is told the period, the carrier frequency and the DC voltage as it is told the pole "
                                         "pairs: errors and intervals are of the base parameters corrected for the sample and hold and the carrier's "
                                         "ripple (`diagnose --control-period --carrier-frequency --dc-voltage`, docs/diagnosis.md)."
+                                      : "",
+                                  spec.current_loop ? " The diagnosis is also told the drive's current-loop bandwidth (`--current-bandwidth`): its models "
+                                                      "pass the effects' angle harmonics through the loop (docs/diagnosis.md, section 8)."
                                       : "",
                                   std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.shared_noise_bias.has_value(); })
                                       ? " Where the diagnosis states it, errors and intervals are also of the base parameters corrected for the noise "

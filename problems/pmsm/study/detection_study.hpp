@@ -94,6 +94,9 @@ struct StudySpec {
     // Library effects the profile itself holds in every drive (a measured flux map is saturation):
     // part of every case's truth, so "clean" means "the profile's own effects alone".
     std::vector<std::string> profile_effects;  // sorted
+    // Whether the diagnosis is told the device plant's current-loop bandwidth (`current_loop = true`;
+    // diagnose --current-bandwidth): its models then pass the effects' angle harmonics through the loop.
+    bool current_loop = false;
     std::filesystem::path output;      // resolved against the study file's directory
     std::filesystem::path keep_data;   // when set, each drive's measurement is written here (CASE_seedN.csv and sidecar)
     std::string only;                  // when set, only cases whose label (design/label with designs) contains it
