@@ -8,6 +8,8 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "problems/pmsm/fit/model_fit.hpp"
 #include "problems/pmsm/model/model_spec.hpp"
@@ -33,6 +35,38 @@ TEST_CASE("the loop's response is a first-order low pass without speed or delay,
     }
     // Slow harmonics pass whole, at any speed and delay.
     CHECK(std::abs(loop_response(alpha, 187.5e-6, 10.0, 60.0) - 1.0) < 0.05);
+}
+
+TEST_CASE("the loop's response is what a simulated loop logs beyond what its currents carry", "[pmsm][current_loop]") {
+    // The loop of the formula, integrated in time instead of solved: a machine of one inductance in
+    // the rotor frame (L di/dt + j omega L i = applied voltage less the law's voltage w), a
+    // proportional controller alpha L on the current error with the feed-forward j omega L i on the
+    // current, its output applied after the delay. The steady-state model predicts a row's logged
+    // voltage from the row's own current, j omega L i, plus the law's value: what the logged reference
+    // holds beyond j omega L i is G w.
+    using namespace std::complex_literals;
+    const double alpha = 2.0 * std::numbers::pi * 400.0, delay = 187.5e-6, inductance = 7.5e-3, dt = 1.5625e-7;
+    const auto delay_steps = static_cast<std::size_t>(std::lround(delay / dt));
+    for (const auto [omega, omega_h] : {std::pair{628.3, 3770.0}, std::pair{628.3, -3770.0}, std::pair{-235.6, 1413.7}, std::pair{47.1, -282.7}}) {
+        std::vector<std::complex<double>> sent(delay_steps, 0.0);  // the controller's outputs in flight
+        std::complex<double> current = 0.0, projection = 0.0;
+        const double settle = 0.05, span = 2.0 * std::numbers::pi / std::abs(omega_h) * 20.0;
+        std::size_t at = 0;
+        for (double t = 0.0; t < settle + span; t += dt) {
+            const std::complex<double> law = std::exp(1i * omega_h * t);
+            const std::complex<double> logged = -alpha * inductance * current + 1i * omega * inductance * current;
+            const std::complex<double> applied = sent[at];
+            sent[at] = logged;
+            at = (at + 1) % delay_steps;
+            if (t >= settle) projection += (logged - 1i * omega * inductance * current) * std::conj(law) * dt;
+            current += dt * (applied - law - 1i * omega * inductance * current) / inductance;
+        }
+        // The law's voltage w is what the applied voltage loses; the loop makes up G w of it.
+        const std::complex<double> simulated = projection / span;
+        const std::complex<double> formula = loop_response(alpha, delay, omega, omega_h);
+        INFO("omega " << omega << ", omega_h " << omega_h << ": simulated " << simulated << ", formula " << formula);
+        CHECK(std::abs(simulated - formula) < 0.01 * std::abs(formula) + 0.005);
+    }
 }
 
 TEST_CASE("a stated current loop takes up the dead time's harmonics the loop leaves in the current", "[pmsm][current_loop]") {

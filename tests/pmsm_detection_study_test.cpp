@@ -388,7 +388,9 @@ TEST_CASE("a study that states the current loop tells each device drive's diagno
     spec.current_loop = true;
     const StudyRun run = run_study(spec, study_cases(spec), DiagnosisOptions{});
     REQUIRE(run.records.size() == 1);
-    CHECK(run.records.front().recommended == "base+deadtime+rs_thermal");
+    // Winding heating's coefficient may be held at copper's value, which is the plant's.
+    INFO("recommended " << run.records.front().recommended);
+    CHECK(run.records.front().correct);
     CHECK(study_markdown(spec, run).find("told the drive's current-loop bandwidth") != std::string::npos);
 
     testing::TemporaryDirectory dir;

@@ -186,7 +186,7 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
 std::complex<double> loop_response(double alpha, double delay, double omega, double omega_h) {
     using namespace std::complex_literals;
     const std::complex<double> a = alpha - 1i * omega;
-    return a / (a * std::exp(-1i * omega_h * delay) + 1i * (omega_h + omega));
+    return alpha / (a * std::exp(-1i * omega_h * delay) + 1i * (omega_h + omega));
 }
 
 void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, const double* p, ModelState& s, Eigen::Index first) const {

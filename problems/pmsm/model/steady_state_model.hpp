@@ -43,11 +43,12 @@ struct AffinePrediction {
 };
 
 // How much of a harmonic of the voltage a machine needs, turning at `omega_h` (rad/s, signed) in the
-// rotor frame at electrical speed `omega`, the current loop puts into its logged reference, the rest
-// being left in the current: G = (alpha - j omega) / ((alpha - j omega) e^{-j omega_h delay} +
-// j (omega_h + omega)), for an IMC-tuned PI loop of bandwidth alpha (rad/s) with its feed-forward of
-// j omega L i on the measured current, the plant's resistance neglected beside omega_h L
-// (docs/diagnosis.md, section 8). 1 at omega_h = omega = 0.
+// rotor frame at electrical speed `omega`, the current loop puts into its logged reference beyond
+// what the current it leaves carries through the steady-state model (which predicts each row from
+// the row's own current, so R i + j omega L i of that current is already in it):
+// G = alpha / ((alpha - j omega) e^{-j omega_h delay} + j (omega_h + omega)), for an IMC-tuned PI
+// loop of bandwidth alpha (rad/s) with its feed-forward of j omega L i on the measured current, the
+// plant's resistance neglected beside omega_h L (docs/diagnosis.md, section 8). 1 at omega_h = 0.
 std::complex<double> loop_response(double alpha, double delay, double omega, double omega_h);
 
 class SteadyStateModel {
