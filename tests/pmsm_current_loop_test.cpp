@@ -1,12 +1,14 @@
 // The drive's current loop between the machine's voltage and the logged reference
-// (model/steady_state_model.hpp, loop_response): what the steady-state model passes an effect's angle
+// (model/steady_state_model.hpp, pass_through_current_loop): what the steady-state model passes an effect's angle
 // harmonics through once a log states the loop's bandwidth, against the closed form of a first-order
 // loop and against the device plant, which switches its legs under a discrete PI controller and
 // knows nothing of the formula.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -25,47 +27,118 @@ using namespace mhb;
 using namespace mhb::pmsm;
 using namespace mhb::pmsm::testing;
 
-TEST_CASE("the loop's response is a first-order low pass without speed or delay, and 1 at zero frequency", "[pmsm][current_loop]") {
-    const double alpha = 2.0 * std::numbers::pi * 400.0;
-    CHECK(std::abs(loop_response(alpha, 187.5e-6, 0.0, 0.0) - 1.0) < 1e-15);
-    // An IMC-tuned PI loop closes to alpha / (s + alpha).
-    for (const double omega_h : {-5000.0, -300.0, 100.0, 2513.0, 20000.0}) {
-        const std::complex<double> first_order = alpha / std::complex<double>(alpha, omega_h);
-        CHECK(std::abs(loop_response(alpha, 0.0, 0.0, omega_h) - first_order) < 1e-12);
-    }
-    // Slow harmonics pass whole, at any speed and delay.
-    CHECK(std::abs(loop_response(alpha, 187.5e-6, 10.0, 60.0) - 1.0) < 0.05);
+namespace {
+
+// The continuous loop's response to a harmonic of the law turning at omega_h in the rotor frame at
+// speed omega, beyond what the rows' own currents carry (docs/diagnosis.md, section 8), its delay
+// tau: alpha / ((alpha - j omega) e^{-j omega_h tau} + j (omega_h + omega)).
+std::complex<double> continuous_response(double alpha, double tau, double omega, double omega_h) {
+    using namespace std::complex_literals;
+    const std::complex<double> a = alpha - 1i * omega;
+    return alpha / (a * std::exp(-1i * omega_h * tau) + 1i * (omega_h + omega));
 }
 
-TEST_CASE("the loop's response is what a simulated loop logs beyond what its currents carry", "[pmsm][current_loop]") {
-    // The loop of the formula, integrated in time instead of solved: a machine of one inductance in
-    // the rotor frame (L di/dt + j omega L i = applied voltage less the law's voltage w), a
-    // proportional controller alpha L on the current error with the feed-forward j omega L i on the
-    // current, its output applied after the delay. The steady-state model predicts a row's logged
-    // voltage from the row's own current, j omega L i, plus the law's value: what the logged reference
-    // holds beyond j omega L i is G w.
+// The model's loop on a law e^{j omega_h t} sampled every control period, `rows` rows of one run:
+// the phasor of what it puts in the reference over the last half of the rows.
+std::complex<double> filtered_phasor(const CurrentLoop& loop, double omega, double omega_h, Eigen::Index rows) {
+    std::vector<double> speed(static_cast<std::size_t>(rows), omega), w_d(speed.size()), w_q(speed.size());
+    std::vector<std::uint8_t> steps(speed.size(), 1);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+        const auto law = std::polar(1.0, omega_h * loop.period * static_cast<double>(k));
+        w_d[static_cast<std::size_t>(k)] = law.real();
+        w_q[static_cast<std::size_t>(k)] = law.imag();
+    }
+    pass_through_current_loop(loop, speed.data(), steps.data(), w_d.data(), w_q.data(), rows);
+    std::complex<double> sum = 0.0;
+    for (Eigen::Index k = rows / 2; k < rows; ++k)
+        sum += std::complex<double>(w_d[static_cast<std::size_t>(k)], w_q[static_cast<std::size_t>(k)]) *
+               std::polar(1.0, -omega_h * loop.period * static_cast<double>(k));
+    return sum / static_cast<double>(rows - rows / 2);
+}
+
+}  // namespace
+
+TEST_CASE("the model's loop passes a constant law whole and follows a first-order low pass as its period shrinks", "[pmsm][current_loop]") {
+    const double alpha = 2.0 * std::numbers::pi * 400.0;
+    for (const double corner : {0.0, 67.0, 2270.0})
+        CHECK(std::abs(filtered_phasor(CurrentLoop{alpha, 125e-6, corner, corner}, 628.3, 0.0, 400) - 1.0) < 1e-9);
+    // An IMC-tuned PI loop without delay or speed and without resistance closes to alpha / (s +
+    // alpha); with a period of 1 us the held voltage and the delay of 1.5 periods hardly differ.
+    for (const double omega_h : {-5000.0, -300.0, 100.0, 2513.0, 20000.0}) {
+        const std::complex<double> first_order = alpha / std::complex<double>(alpha, omega_h);
+        const std::complex<double> model = filtered_phasor(CurrentLoop{alpha, 1e-6}, 0.0, omega_h, 200000);
+        INFO("omega_h " << omega_h << ": model " << model << ", first order " << first_order);
+        CHECK(std::abs(model - first_order) < 0.01 * std::abs(first_order) + 1e-3);
+    }
+}
+
+TEST_CASE("the model's loop is what a simulated loop logs beyond what its currents carry", "[pmsm][current_loop]") {
+    // The loop integrated in time in fine steps: a salient machine in the rotor frame (L_d di_d/dt =
+    // v_d - R i_d + omega L_q i_q, L_q di_q/dt = v_q - R i_q - omega L_d i_d, v the applied voltage less
+    // the law's voltage), a PI controller per axis (K_p = alpha L, K_i = alpha R, its integral
+    // updated after each output) on the sampled current with the feed-forward of j omega L i on that
+    // current, its output applied over the next control period, the law turning in time. The
+    // steady-state model predicts a row's logged voltage from the row's own current, R i + j omega L i,
+    // plus its law: what the logged reference holds beyond that is what the model's loop must give.
     using namespace std::complex_literals;
-    const double alpha = 2.0 * std::numbers::pi * 400.0, delay = 187.5e-6, inductance = 7.5e-3, dt = 1.5625e-7;
-    const auto delay_steps = static_cast<std::size_t>(std::lround(delay / dt));
-    for (const auto [omega, omega_h] : {std::pair{628.3, 3770.0}, std::pair{628.3, -3770.0}, std::pair{-235.6, 1413.7}, std::pair{47.1, -282.7}}) {
-        std::vector<std::complex<double>> sent(delay_steps, 0.0);  // the controller's outputs in flight
-        std::complex<double> current = 0.0, projection = 0.0;
-        const double settle = 0.05, span = 2.0 * std::numbers::pi / std::abs(omega_h) * 20.0;
-        std::size_t at = 0;
-        for (double t = 0.0; t < settle + span; t += dt) {
-            const std::complex<double> law = std::exp(1i * omega_h * t);
-            const std::complex<double> logged = -alpha * inductance * current + 1i * omega * inductance * current;
-            const std::complex<double> applied = sent[at];
-            sent[at] = logged;
-            at = (at + 1) % delay_steps;
-            if (t >= settle) projection += (logged - 1i * omega * inductance * current) * std::conj(law) * dt;
-            current += dt * (applied - law - 1i * omega * inductance * current) / inductance;
+    const double period = 125e-6;
+    const int substeps = 400;
+    const double dt = period / substeps;
+    struct Case {
+        double alpha, resistance, ld, lq, omega, omega_h;
+    };
+    const double a5 = 2.0 * std::numbers::pi * 400.0, a_servo = 2.0 * std::numbers::pi * 250.0;
+    for (const Case& c : {Case{a5, 0.5, 6e-3, 9e-3, 628.3, 3770.0}, Case{a5, 0.5, 6e-3, 9e-3, 628.3, -3770.0},
+                          Case{a5, 0.5, 6e-3, 9e-3, -235.6, 1413.7}, Case{a5, 0.0, 7.5e-3, 7.5e-3, 47.1, -282.7},
+                          Case{a_servo, 46.0, 20.25e-3, 20.25e-3, 200.0, 1200.0}, Case{a_servo, 46.0, 20.25e-3, 20.25e-3, 40.0, -240.0}}) {
+        const Eigen::Index rows = 800;
+        std::vector<double> speed(static_cast<std::size_t>(rows), c.omega), w_d(speed.size()), w_q(speed.size());
+        std::vector<std::uint8_t> steps(speed.size(), 1);
+        std::vector<std::complex<double>> logged(speed.size());
+        double id = 0.0, iq = 0.0, yd = 0.0, yq = 0.0, applied_d = 0.0, applied_q = 0.0;
+        for (Eigen::Index k = 0; k < rows; ++k) {
+            const auto row = static_cast<std::size_t>(k);
+            const std::complex<double> law = std::polar(1.0, c.omega_h * period * static_cast<double>(k));
+            w_d[row] = law.real();
+            w_q[row] = law.imag();
+            const double output_d = -c.alpha * c.ld * id + yd - c.omega * c.lq * iq;
+            const double output_q = -c.alpha * c.lq * iq + yq + c.omega * c.ld * id;
+            logged[row] = {output_d - (c.resistance * id - c.omega * c.lq * iq), output_q - (c.resistance * iq + c.omega * c.ld * id)};
+            yd -= c.alpha * c.resistance * period * id;
+            yq -= c.alpha * c.resistance * period * iq;
+            // Midpoint steps over the period: the controller's voltage is held, the law turns on.
+            for (int m = 0; m < substeps; ++m) {
+                const std::complex<double> w = std::polar(1.0, c.omega_h * (period * static_cast<double>(k) + dt * (m + 0.5)));
+                auto slope_d = [&](double d, double q) { return (applied_d - w.real() - c.resistance * d + c.omega * c.lq * q) / c.ld; };
+                auto slope_q = [&](double d, double q) { return (applied_q - w.imag() - c.resistance * q - c.omega * c.ld * d) / c.lq; };
+                const double hd = id + 0.5 * dt * slope_d(id, iq), hq = iq + 0.5 * dt * slope_q(id, iq);
+                id += dt * slope_d(hd, hq);
+                iq += dt * slope_q(hd, hq);
+            }
+            applied_d = output_d;
+            applied_q = output_q;
         }
-        // The law's voltage w is what the applied voltage loses; the loop makes up G w of it.
-        const std::complex<double> simulated = projection / span;
-        const std::complex<double> formula = loop_response(alpha, delay, omega, omega_h);
-        INFO("omega " << omega << ", omega_h " << omega_h << ": simulated " << simulated << ", formula " << formula);
-        CHECK(std::abs(simulated - formula) < 0.01 * std::abs(formula) + 0.005);
+        const CurrentLoop loop{c.alpha, period, c.resistance / c.ld, c.resistance / c.lq};
+        pass_through_current_loop(loop, speed.data(), steps.data(), w_d.data(), w_q.data(), rows);
+        // Compared once both starts have settled (the model starts at the loop's steady state, the
+        // simulation at zero current).
+        double worst = 0.0;
+        for (std::size_t k = static_cast<std::size_t>(rows / 2); k < speed.size(); ++k)
+            worst = std::max(worst, std::abs(logged[k] - std::complex<double>(w_d[k], w_q[k])));
+        INFO("alpha " << c.alpha << ", R " << c.resistance << ", omega " << c.omega << ", omega_h " << c.omega_h << ": largest difference "
+                      << worst << " of a law of 1");
+        // The model takes the law over a period on the line between two rows: off a turning law by
+        // about (omega_h T)^2 / 12, 1.8 % at 600 Hz and 8 kHz.
+        const double step = std::abs(c.omega_h) * period;
+        CHECK(worst < 0.1 * step * step + 0.006);
+        if (c.resistance == 0.0) {
+            // Without resistance, against the continuous closed form with a delay of 1.5 periods: near
+            // it, not equal (a held voltage is not a delay).
+            const std::complex<double> model = filtered_phasor(loop, c.omega, c.omega_h, 4000);
+            const std::complex<double> closed = continuous_response(c.alpha, 1.5 * period, c.omega, c.omega_h);
+            INFO("model " << model << ", closed form " << closed);
+            CHECK(std::abs(model - closed) < 0.05 * std::abs(closed));
+        }
     }
 }
 
@@ -81,9 +154,29 @@ TEST_CASE("a stated current loop takes up the dead time's harmonics the loop lea
     state_current_loop(data, DriveTiming{drive.control.control_period, 0.0, 0.0, drive.control.current_bandwidth});
     const ModelFit with = fit_model(data, parse_model_spec("base+deadtime"), FitOptions{});
     INFO("rms without the loop " << without.rms.total << " V, with it " << with.rms.total << " V; V_dt " << without.values[4] << " and "
-                                 << with.values[4] << " V");
-    CHECK(with.rms.total < 0.7 * without.rms.total);
-    CHECK(with.values[4] == Approx(6.72).epsilon(0.05));
+                                 << with.values[4] << " V; Rs " << without.values[0] << " and " << with.values[0] << " Ohm");
+    CHECK(with.rms.total < 0.5 * without.rms.total);
+    CHECK(with.values[4] == Approx(6.72).epsilon(0.03));
+    CHECK(with.values[0] == Approx(0.5).epsilon(0.04));
+}
+
+TEST_CASE("a run of the model's loop starts again at a row that does not follow the one before", "[pmsm][current_loop]") {
+    const CurrentLoop loop{2.0 * std::numbers::pi * 400.0, 125e-6, 67.0, 56.0};
+    std::vector<double> speed(100, 628.3), w_d(100), w_q(100);
+    for (std::size_t k = 0; k < w_d.size(); ++k) {
+        w_d[k] = k < 50 ? 1.0 : -1.0;  // a step at row 50, as a phase current's sign turns
+        w_q[k] = 0.5;
+    }
+    std::vector<std::uint8_t> steps(100, 1);
+    auto joined_d = w_d, joined_q = w_q;
+    pass_through_current_loop(loop, speed.data(), steps.data(), joined_d.data(), joined_q.data(), 100);
+    steps[50] = 0;
+    pass_through_current_loop(loop, speed.data(), steps.data(), w_d.data(), w_q.data(), 100);
+    // Joined, the loop lags the step; started again, the row is the law itself.
+    CHECK(std::abs(joined_d[50] - -1.0) > 0.5);
+    CHECK(w_d[50] == Approx(-1.0).margin(1e-12));
+    CHECK(w_q[50] == Approx(0.5).margin(1e-12));
+    CHECK(w_d[49] == Approx(joined_d[49]).margin(1e-15));
 }
 
 TEST_CASE("a current bandwidth without the control period is refused", "[pmsm][current_loop]") {

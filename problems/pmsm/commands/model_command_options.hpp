@@ -85,8 +85,8 @@ inline void add_model_options(CLI::App* cmd, ModelCommandOptions& o, const std::
         ->check(number_in(0.0, 1e7));
     cmd->add_option("--dc-voltage", o.timing.dc_voltage, "with --carrier-frequency: the inverter's DC link voltage (V)")->check(number_in(0.0, 1e6));
     cmd->add_option("--current-bandwidth", o.timing.current_bandwidth,
-                    "with --control-period: the current loop's closed-loop bandwidth (Hz); the angle harmonics of dead time and flux "
-                    "harmonics then reach the logged voltage through the loop, as they do on a drive (docs/diagnosis.md, section 8)")
+                    "with --control-period: the current loop's closed-loop bandwidth (Hz); the voltages of dead time and flux harmonics "
+                    "then reach the logged voltage through the loop, as they do on a drive (docs/diagnosis.md, section 8)")
         ->check(number_in(0.0, 1e6));
     cmd->add_option("--json", o.json, json_help);
 }

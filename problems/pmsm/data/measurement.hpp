@@ -34,8 +34,8 @@ struct Measurement {
 
     // The drive's current loop, when its user states it (`--current-bandwidth`): its closed-loop
     // bandwidth (Hz, 0: not stated) and the delay from a sampled current to the voltage applied for
-    // it (s; 1.5 control periods). The angle harmonics an effect puts in the machine's voltage reach
-    // the logged reference through the loop (SteadyStateModel, docs/diagnosis.md, section 8).
+    // it (s; 1.5 control periods). The voltage of an effect with angle harmonics reaches the logged
+    // reference through the loop (SteadyStateModel, docs/diagnosis.md, section 8).
     double current_loop_bandwidth = 0.0;
     double current_loop_delay = 0.0;
 

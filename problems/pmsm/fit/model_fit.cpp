@@ -899,10 +899,20 @@ Measurement model_rows(const SteadyStateModel& model, const std::vector<Eigen::I
     out.source = data.source;
     out.current_loop_bandwidth = data.current_loop_bandwidth;
     out.current_loop_delay = data.current_loop_delay;
-    // A stated loop takes each operating point's mean state from the rows of its segment.
-    if (data.current_loop_bandwidth > 0.0 && data.has_segments()) {
-        out.segment = data.segment(rows);
-        out.segment_labels = data.segment_labels;
+    // A stated loop runs along consecutive rows of a segment: the subset keeps the segments and the
+    // time of its rows (a log without time: a control period a row), so that rows the subset
+    // skipped break the run.
+    if (data.current_loop_bandwidth > 0.0) {
+        if (data.has_segments()) {
+            out.segment = data.segment(rows);
+            out.segment_labels = data.segment_labels;
+        }
+        if (data.t) {
+            out.t = Eigen::VectorXd((*data.t)(rows));
+        } else {
+            out.t = Eigen::VectorXd(static_cast<Eigen::Index>(rows.size()));
+            for (std::size_t k = 0; k < rows.size(); ++k) (*out.t)[static_cast<Eigen::Index>(k)] = static_cast<double>(rows[k]) * data.current_loop_delay / 1.5;
+        }
     }
     out.i_d = data.i_d(rows);
     out.i_q = data.i_q(rows);

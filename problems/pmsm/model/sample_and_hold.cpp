@@ -110,7 +110,7 @@ void state_current_loop(Measurement& data, const DriveTiming& timing) {
 
 std::string current_loop_text(double bandwidth, double delay) {
     if (!(bandwidth > 0.0)) return {};
-    return fmt::format("current loop: {:g} Hz, its delay {:g} µs (dead time's and flux harmonics' angle harmonics reach the logged voltage "
+    return fmt::format("current loop: {:g} Hz, its delay {:g} µs (dead time's and flux harmonics' voltages reach the logged one "
                        "through it; docs/diagnosis.md, section 8)\n",
                        bandwidth, 1e6 * delay);
 }

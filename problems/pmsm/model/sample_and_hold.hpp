@@ -34,8 +34,9 @@ struct DriveTiming {
 };
 
 // Tells `data` the drive's current loop when `timing` states its bandwidth: the models of the data
-// then pass their effects' angle harmonics through it (loop_response, model/steady_state_model.hpp),
-// the loop's delay taken as 1.5 control periods (a period to compute, half a period of holding).
+// then pass the voltage of effects with angle harmonics through it (pass_through_current_loop,
+// model/steady_state_model.hpp), the loop's delay taken as 1.5 control periods (a period to compute,
+// half a period of holding).
 void state_current_loop(Measurement& data, const DriveTiming& timing);
 // "current loop: 400 Hz, its delay 187.5 µs (...)" and a newline, for a stated loop; empty otherwise.
 std::string current_loop_text(double bandwidth, double delay);

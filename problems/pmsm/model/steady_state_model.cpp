@@ -8,6 +8,7 @@
 #include <numbers>
 #include <tuple>
 
+#include <Eigen/Cholesky>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <fmt/format.h>
@@ -94,14 +95,32 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
           return b;
       }) {
     tables_ = SharedTables::of(data_);
-    loop_alpha_ = 2.0 * std::numbers::pi * data_.current_loop_bandwidth;
+    loop_.alpha = 2.0 * std::numbers::pi * data_.current_loop_bandwidth;
+    loop_.period = data_.current_loop_delay / 1.5;  // state_current_loop: the delay is 1.5 control periods
+    bool any_through_loop = false;
     for (const auto& e : effects_) {
-        std::vector<int> orders = e->angle_orders();
-        std::sort(orders.begin(), orders.end());
-        // Successive products reach every order only when each is a multiple of the first.
-        const bool declared = !orders.empty() && orders != Effect::every_angle_order() && orders.front() > 0 &&
-                              std::all_of(orders.begin(), orders.end(), [&](int m) { return m % orders.front() == 0; });
-        loop_orders_.push_back(loop_alpha_ > 0.0 && data_.theta_e && declared ? std::move(orders) : std::vector<int>{});
+        const std::vector<int> orders = e->angle_orders();
+        const bool declared = !orders.empty() && orders != Effect::every_angle_order();
+        through_loop_.push_back(loop_.alpha > 0.0 && loop_.period > 0.0 && data_.theta_e && declared);
+        any_through_loop = any_through_loop || through_loop_.back();
+    }
+    if (any_through_loop) {
+        // Rows follow each other by whole control periods within a segment; a log without time is
+        // taken as one row a period (model_rows gives a subset the time of its rows).
+        constexpr int longest_gap = 64;
+        loop_steps_.assign(static_cast<std::size_t>(data_.size()), 0);
+        for (Eigen::Index k = 1; k < data_.size(); ++k) {
+            if (data_.has_segments() && data_.segment[k] != data_.segment[k - 1]) continue;
+            if (!data_.t) {
+                loop_steps_[static_cast<std::size_t>(k)] = 1;
+                continue;
+            }
+            const double periods = ((*data_.t)[k] - (*data_.t)[k - 1]) / loop_.period;
+            const double whole = std::round(periods);
+            if (whole >= 1.0 && whole <= longest_gap && std::abs(periods - whole) < 0.25)
+                loop_steps_[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(whole);
+        }
+        set_loop_corners();
     }
     const OperatingScale scale = tables_->scale;
     const Bounds base = base_parameter_bounds();
@@ -183,105 +202,134 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
     if (reads_temp_magnet_) s.temp_magnet = data_.temp_magnet->segment(first, n).array();
 }
 
-std::complex<double> loop_response(double alpha, double delay, double omega, double omega_h) {
-    using namespace std::complex_literals;
-    const std::complex<double> a = alpha - 1i * omega;
-    return alpha / (a * std::exp(-1i * omega_h * delay) + 1i * (omega_h + omega));
+void pass_through_current_loop(const CurrentLoop& loop, const double* omega, const std::uint8_t* steps, double* w_d, double* w_q,
+                               Eigen::Index n) {
+    // x: the flux L i of the current the loop leaves (rotor frame, d and q), at the row's sample; y:
+    // the PI's integral, a voltage. The machine: dx_d/dt = applied_d - law_d + omega x_q - c_d x_d,
+    // dx_q/dt = applied_q - law_q - omega x_d - c_q x_q (c: the corners R / L). The controller at a
+    // sample: -alpha x + y less the feed-forward's j omega x (d: -omega x_q, q: +omega x_d), then
+    // y -= alpha c T x. The model's rows hold R i + j omega L i of the current, so what it lacks of
+    // the reference is -alpha x + y - c x.
+    // Without both corners (a machine without resistance, or not known): a proportional loop.
+    const bool integral = loop.corner_d > 0.0 && loop.corner_q > 0.0;
+    const double alpha = loop.alpha, period = loop.period, cd = integral ? loop.corner_d : 0.0, cq = integral ? loop.corner_q : 0.0;
+    double xd = 0.0, xq = 0.0, yd = 0.0, yq = 0.0, applied_d = 0.0, applied_q = 0.0, computed_d = 0.0, computed_q = 0.0;
+    double before_d = 0.0, before_q = 0.0, out_d = 0.0, out_q = 0.0;
+    for (Eigen::Index r = 0; r < n; ++r) {
+        const double law_d = w_d[r], law_q = w_q[r];
+        if (r == 0 || steps[r] == 0) {
+            // The steady state under a constant law: with the integral the current is back on its
+            // reference and the integral holds the law; without it the proportional part does.
+            if (integral) {
+                xd = xq = 0.0;  // (then -alpha x + y - c x is the law)
+                yd = law_d;
+                yq = law_q;
+            } else {
+                xd = -law_d / alpha;
+                xq = -law_q / alpha;
+                yd = yq = 0.0;
+            }
+            computed_d = applied_d = -alpha * xd + yd - omega[r] * xq;
+            computed_q = applied_q = -alpha * xq + yq + omega[r] * xd;
+            out_d = law_d;
+            out_q = law_q;
+        } else {
+            const double w = omega[r - 1];
+            // RK4 over each period in substeps of at most a quarter of the fastest rate's time (the
+            // turning at omega, the decay at the corners): one on a drive, where both are slow
+            // beside the control rate.
+            const double fastest = std::max({std::abs(w), cd, cq});
+            const int substeps = std::max(1, static_cast<int>(std::ceil(4.0 * fastest * period)));
+            const double h = period / substeps;
+            const double count = steps[r];
+            for (int k = 0; k < steps[r]; ++k) {
+                // The law over the period: its mean on the line between the rows' values (the loss
+                // follows the current through the period, not its value at the period's start).
+                const double f = (k + 0.5) / count;
+                const double bd = applied_d - (before_d + (law_d - before_d) * f), bq = applied_q - (before_q + (law_q - before_q) * f);
+                auto slope = [&](double ad, double aq, double& sd, double& sq) {
+                    sd = bd + w * aq - cd * ad;
+                    sq = bq - w * ad - cq * aq;
+                };
+                for (int m = 0; m < substeps; ++m) {
+                    double k1d, k1q, k2d, k2q, k3d, k3q, k4d, k4q;
+                    slope(xd, xq, k1d, k1q);
+                    slope(xd + 0.5 * h * k1d, xq + 0.5 * h * k1q, k2d, k2q);
+                    slope(xd + 0.5 * h * k2d, xq + 0.5 * h * k2q, k3d, k3q);
+                    slope(xd + h * k3d, xq + h * k3q, k4d, k4q);
+                    xd += h / 6.0 * (k1d + 2.0 * k2d + 2.0 * k3d + k4d);
+                    xq += h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
+                }
+                applied_d = computed_d;
+                applied_q = computed_q;
+                computed_d = -alpha * xd + yd - w * xq;
+                computed_q = -alpha * xq + yq + w * xd;
+                out_d = -alpha * xd + yd - cd * xd;
+                out_q = -alpha * xq + yq - cq * xq;
+                if (integral) {
+                    yd -= alpha * cd * period * xd;
+                    yq -= alpha * cq * period * xq;
+                }
+            }
+        }
+        before_d = law_d;
+        before_q = law_q;
+        w_d[r] = out_d;
+        w_q[r] = out_q;
+    }
+}
+
+void SteadyStateModel::set_loop_corners() {
+    // The base model is linear in Rs, Ld, Lq, psi_f: u_d = Rs i_d - omega Lq i_q, u_q = Rs i_q +
+    // omega Ld i_d + omega psi_f. Fitted alone it reads an inverter's voltage error, which does not
+    // grow with the current, as resistance (on the 5 kW machine with 1.5 us of dead time, 2.8 times
+    // R_s), so a fifth column takes that error's shape, the phase currents' signs turned into the
+    // rotor frame (the loop needs the angle; the column is linear, so the fit stays exact). Normal
+    // equations over all rows, scaled so that columns of very different size do not decide.
+    using Vector5d = Eigen::Matrix<double, 5, 1>;
+    using Matrix5d = Eigen::Matrix<double, 5, 5>;
+    Matrix5d gram = Matrix5d::Zero();
+    Vector5d moment = Vector5d::Zero();
+    for (Eigen::Index k = 0; k < data_.size(); ++k) {
+        const double id = data_.i_d[k], iq = data_.i_q[k], w = data_.omega_e[k];
+        const double c = tables_->cos[k], s = tables_->sin[k];
+        const double ia = id * c - iq * s, ib = id * s + iq * c;  // alpha-beta
+        const double a = std::copysign(1.0, ia), b = std::copysign(1.0, -0.5 * ia + 0.5 * std::numbers::sqrt3 * ib),
+                     cc = std::copysign(1.0, -0.5 * ia - 0.5 * std::numbers::sqrt3 * ib);
+        const double sa = (2.0 * a - b - cc) / 3.0, sb = (b - cc) / std::numbers::sqrt3;
+        Vector5d row_d, row_q;
+        row_d << id, 0.0, -w * iq, 0.0, sa * c + sb * s;
+        row_q << iq, w * id, 0.0, w, -sa * s + sb * c;
+        gram.noalias() += row_d * row_d.transpose() + row_q * row_q.transpose();
+        moment.noalias() += row_d * data_.u_d[k] + row_q * data_.u_q[k];
+    }
+    const Vector5d scale = gram.diagonal().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
+    const Matrix5d scaled = scale.asDiagonal() * gram * scale.asDiagonal();
+    const Vector5d base = scale.asDiagonal() * scaled.ldlt().solve(scale.asDiagonal() * moment);
+    // A log that does not determine them (no current, no speed) leaves the corners at zero: the
+    // proportional loop.
+    if (base.allFinite() && base[0] > 0.0 && base[1] > 0.0 && base[2] > 0.0) {
+        loop_.corner_d = base[0] / base[1];
+        loop_.corner_q = base[0] / base[2];
+    }
 }
 
 void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, const double* p, ModelState& s, Eigen::Index first) const {
-    const Effect& e = *effects_[effect];
-    // Each row takes its own value of the law; what the loop changes, the law's harmonics, is taken at
-    // the mean state of the row's operating point within the block (a run of one segment), so that
-    // the noise of the row's current does not enter it.
-    struct Grid {
-        std::vector<int> declared;         // the effect's orders (loop_orders_)
-        std::vector<int> orders;           // m = +order and -order for each of them
-        ModelState state;                  // a turn of the angle at an operating point's mean state
-        Eigen::ArrayXcd turns;             // e^{-j m theta_k}, points x orders, column-major
-        Eigen::ArrayXcd change;            // (G - 1) times the law's coefficient of each m
-    };
-    // One grid per set of orders a thread meets (dead time's, a flux harmonic's), made once.
-    thread_local std::vector<Grid> grids;
-    const std::vector<int>& declared = loop_orders_[effect];
-    auto found = std::find_if(grids.begin(), grids.end(), [&](const Grid& g) { return g.declared == declared; });
-    const bool known = found != grids.end();
-    Grid& grid = known ? *found : grids.emplace_back();
-    const Eigen::Index points = 2 * declared.back() + 8;
-    ModelState& g = grid.state;
-    if (!known) {
-        grid.declared = declared;
-        for (const int order : declared) grid.orders.insert(grid.orders.end(), {order, -order});
-    }
-    const std::vector<int>& orders = grid.orders;
-    const auto count = static_cast<Eigen::Index>(orders.size());
-    if (!known) {
-        g.resize(points);
-        g.theta.resize(points);
-        g.cos_theta.resize(points);
-        g.sin_theta.resize(points);
-        grid.turns.resize(points * count);
-        for (Eigen::Index k = 0; k < points; ++k) {
-            g.theta[k] = 2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(points);
-            g.cos_theta[k] = std::cos(g.theta[k]);
-            g.sin_theta[k] = std::sin(g.theta[k]);
-            for (Eigen::Index j = 0; j < count; ++j)
-                grid.turns[j * points + k] = std::polar(1.0, -static_cast<double>(orders[static_cast<std::size_t>(j)]) * g.theta[k]);
-        }
-        grid.change.resize(count);
-    }
-    e.model(which, p, s);
-    g.ld = s.ld;
-    g.lq = s.lq;
+    // The effect's own voltage over the block: what it adds to what the stages before made.
+    thread_local Eigen::ArrayXd before_d, before_q;
     const Eigen::Index n = s.size();
-    for (Eigen::Index begin = 0; begin < n;) {
-        Eigen::Index end = begin + 1;
-        if (data_.has_segments())
-            while (end < n && data_.segment[first + end] == data_.segment[first + begin]) ++end;
-        else
-            end = n;
-        const Eigen::Index rows = end - begin;
-        auto mean = [&](const Eigen::ArrayXd& a) { return a.segment(begin, rows).mean(); };
-        const double omega = mean(s.omega);
-        g.i_d.setConstant(mean(s.i_d));
-        g.i_q.setConstant(mean(s.i_q));
-        g.omega.setConstant(omega);
-        g.rs.setConstant(mean(s.rs));
-        g.psi_f.setConstant(mean(s.psi_f));
-        g.psi_d.setConstant(mean(s.psi_d));
-        g.psi_q.setConstant(mean(s.psi_q));
-        if (s.temp_winding.size() > 0) g.temp_winding.setConstant(points, mean(s.temp_winding));
-        else g.temp_winding.resize(0);
-        if (s.temp_magnet.size() > 0) g.temp_magnet.setConstant(points, mean(s.temp_magnet));
-        else g.temp_magnet.resize(0);
-        g.u_d.setZero();
-        g.u_q.setZero();
-        e.model(which, p, g);
-        // Each harmonic m of the law's voltage at that state, times the loop's response less one:
-        // what the steady law says and the logged reference does not hold.
-        for (Eigen::Index j = 0; j < count; ++j) {
-            std::complex<double> c = 0.0;
-            for (Eigen::Index k = 0; k < points; ++k) c += std::complex<double>(g.u_d[k], g.u_q[k]) * grid.turns[j * points + k];
-            const double m = static_cast<double>(orders[static_cast<std::size_t>(j)]);
-            grid.change[j] = (loop_response(loop_alpha_, data_.current_loop_delay, omega, m * omega) - 1.0) * c / static_cast<double>(points);
-        }
-        // The orders are multiples of the first (ascending, loop_orders_): e^{j m theta} by successive
-        // products of e^{j step theta} rather than a power per order and row.
-        const int step = declared.front();
-        for (Eigen::Index r = begin; r < end; ++r) {
-            const std::complex<double> base = std::pow(std::complex<double>(s.cos_theta[r], s.sin_theta[r]), step);
-            std::complex<double> turn = 1.0, v = 0.0;
-            int at = 0;
-            for (Eigen::Index j = 0; j < count; j += 2) {
-                // e^{j m theta} and its conjugate for the pair +m, -m.
-                for (const int m = orders[static_cast<std::size_t>(j)]; at < m; at += step) turn *= base;
-                v += grid.change[j] * turn + grid.change[j + 1] * std::conj(turn);
-            }
-            s.u_d[r] += v.real();
-            s.u_q[r] += v.imag();
-        }
-        begin = end;
+    if (before_d.size() < n) {
+        before_d.resize(block_rows > n ? block_rows : n);
+        before_q.resize(before_d.size());
     }
+    before_d.head(n) = s.u_d;
+    before_q.head(n) = s.u_q;
+    effects_[effect]->model(which, p, s);
+    s.u_d -= before_d.head(n);
+    s.u_q -= before_q.head(n);
+    pass_through_current_loop(loop_, s.omega.data(), loop_steps_.data() + first, s.u_d.data(), s.u_q.data(), n);
+    s.u_d += before_d.head(n);
+    s.u_q += before_q.head(n);
 }
 
 void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane, Eigen::Index first) const {
@@ -290,7 +338,7 @@ void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& 
         const Effect& e = *effects_[k];
         if (!acts_in(e.model_stages(), which)) continue;
         if (base_lane && e.model_base_dependence(which) == BaseDependence::Additive) continue;
-        if (!loop_orders_[k].empty() && (which == ModelStage::MachineVoltage || which == ModelStage::InverterError))
+        if (through_loop_[k] && (which == ModelStage::MachineVoltage || which == ModelStage::InverterError))
             run_through_loop(k, which, p + offsets_[k], s, first);
         else e.model(which, p + offsets_[k], s);
     }

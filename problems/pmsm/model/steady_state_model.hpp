@@ -5,6 +5,7 @@
 // parameters followed by each effect's real parameters in declaration order.
 #include <algorithm>
 #include <complex>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -42,14 +43,27 @@ struct AffinePrediction {
     Eigen::Index rows() const { return offset_d.size(); }
 };
 
-// How much of a harmonic of the voltage a machine needs, turning at `omega_h` (rad/s, signed) in the
-// rotor frame at electrical speed `omega`, the current loop puts into its logged reference beyond
-// what the current it leaves carries through the steady-state model (which predicts each row from
-// the row's own current, so R i + j omega L i of that current is already in it):
-// G = alpha / ((alpha - j omega) e^{-j omega_h delay} + j (omega_h + omega)), for an IMC-tuned PI
-// loop of bandwidth alpha (rad/s) with its feed-forward of j omega L i on the measured current, the
-// plant's resistance neglected beside omega_h L (docs/diagnosis.md, section 8). 1 at omega_h = 0.
-std::complex<double> loop_response(double alpha, double delay, double omega, double omega_h);
+// A drive's current loop as the models of its log see it: an IMC-tuned PI of bandwidth alpha per
+// axis (K_p = alpha L, K_i = alpha R) with the feed-forward of j omega L i on the measured current,
+// computing once a control period from the sampled current and applying its output over the next.
+struct CurrentLoop {
+    double alpha = 0.0;   // rad/s: 2 pi times the bandwidth
+    double period = 0.0;  // s: the control period
+    // 1/s: R / L_d and R / L_q, the corners of the PI's integral and of the machine's own decay.
+    double corner_d = 0.0, corner_q = 0.0;
+};
+
+// What the loop puts into its logged reference of an effect's voltage, in time: `w_d`, `w_q` hold the
+// voltage the effect takes from the machine (its law's value) at consecutive rows, and on return what
+// the logged reference holds of it beyond what the current it leaves carries through the
+// steady-state model (which predicts each row from the row's own current, so R i + j omega L i of
+// that current is in it already). `steps[r]` counts the control periods from row r - 1 to row r
+// (0: row r starts a run, taken at the loop's steady state, where the reference holds the whole law),
+// `omega` is each row's electrical speed. Over a period the law is its mean on the line between the
+// rows' values. Written in the flux the loop leaves, L i, the inductances enter only through the
+// corners. docs/diagnosis.md, section 8.
+void pass_through_current_loop(const CurrentLoop& loop, const double* omega, const std::uint8_t* steps, double* w_d, double* w_q,
+                               Eigen::Index n);
 
 class SteadyStateModel {
 public:
@@ -138,10 +152,12 @@ private:
     void run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane, Eigen::Index first) const;
     // Coefficients onward, from base parameters p[0..3].
     void from_base(const double* p, ModelState& s, bool base_lane, Eigen::Index first) const;
-    // Runs effect k at this stage as the logged reference sees it: its harmonics, taken at each
-    // operating point's mean state over a turn of the angle, scaled by the loop's response
-    // (loop_response).
+    // Runs effect k at this stage as the logged reference sees it: its voltage over the block's rows
+    // through the stated loop (pass_through_current_loop), a run starting at each segment, each gap
+    // in the logged time and the block's first row.
     void run_through_loop(std::size_t k, ModelStage which, const double* p, ModelState& s, Eigen::Index first) const;
+    // The stated loop's corners R / L from the base model fitted to all rows by least squares.
+    void set_loop_corners();
 
     std::optional<Measurement> owned_;
     const Measurement& data_;
@@ -157,11 +173,15 @@ private:
     Bounds bounds_, plausible_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
-    double loop_alpha_ = 0.0;  // rad/s: 2 pi times the stated current-loop bandwidth (0: none stated)
-    // Per effect, the harmonic orders of the angle whose voltage goes through the stated loop: those
-    // it declares, when the log states the loop and the angle; empty otherwise, and for an effect that
-    // declares none or every order (it does not say which).
-    std::vector<std::vector<int>> loop_orders_;
+    // The stated current loop (alpha 0: none), its corners from the base model's least-squares fit
+    // to all rows of the data.
+    CurrentLoop loop_;
+    // Per effect, whether its voltage goes through the stated loop: when the log states the loop and
+    // the angle, for an effect that declares the harmonic orders of the angle its voltage has (dead
+    // time, flux harmonics; not one that declares none or every order).
+    std::vector<bool> through_loop_;
+    // Per row, the control periods since the row before, for the stated loop (empty without one).
+    std::vector<std::uint8_t> loop_steps_;
     // Temperatures are copied into a block's state only for an effect that lists them
     // (Effect::model_columns): each pass over a long log reads every column it loads from memory.
     bool reads_temp_winding_ = false, reads_temp_magnet_ = false;

@@ -605,7 +605,7 @@ StudyRun run_study(const StudySpec& spec, std::vector<StudyCase> cases, const Di
         // And the device plant's control period and carrier: it holds each voltage over a period and
         // switches it by the carrier, as a digital drive does (the averaged plant applies its voltage
         // continuously).
-        // With `current_loop`, also the loop's bandwidth, through which the effects' angle harmonics reach the logged voltage.
+        // With `current_loop`, also the loop's bandwidth, through which dead time's and flux harmonics' voltages reach the logged one.
         if (sim.device) {
             drive_options.timing = DriveTiming{sim.control.control_period, sim.device->inverter.pwm_frequency, sim.control.dc_voltage,
                                                spec.current_loop ? sim.control.current_bandwidth : 0.0};
@@ -854,7 +854,7 @@ std::string study_markdown(const StudySpec& spec, const StudyRun& run) {
                                         "ripple (`diagnose --control-period --carrier-frequency --dc-voltage`, docs/diagnosis.md)."
                                       : "",
                                   spec.current_loop ? " The diagnosis is also told the drive's current-loop bandwidth (`--current-bandwidth`): its models "
-                                                      "pass the effects' angle harmonics through the loop (docs/diagnosis.md, section 8)."
+                                                      "pass the voltages of dead time and flux harmonics through the loop, row by row in time (docs/diagnosis.md, section 8)."
                                       : "",
                                   std::any_of(run.records.begin(), run.records.end(), [](const StudyRecord& r) { return r.shared_noise_bias.has_value(); })
                                       ? " Where the diagnosis states it, errors and intervals are also of the base parameters corrected for the noise "

@@ -95,7 +95,7 @@ struct StudySpec {
     // part of every case's truth, so "clean" means "the profile's own effects alone".
     std::vector<std::string> profile_effects;  // sorted
     // Whether the diagnosis is told the device plant's current-loop bandwidth (`current_loop = true`;
-    // diagnose --current-bandwidth): its models then pass the effects' angle harmonics through the loop.
+    // diagnose --current-bandwidth): its models then pass dead time's and flux harmonics' voltages through the loop.
     bool current_loop = false;
     std::filesystem::path output;      // resolved against the study file's directory
     std::filesystem::path keep_data;   // when set, each drive's measurement is written here (CASE_seedN.csv and sidecar)
