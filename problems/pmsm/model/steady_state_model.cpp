@@ -121,6 +121,10 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
                 loop_steps_[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(whole);
         }
         set_loop_corners();
+        if (data_.size() <= loop_periods_kept) {
+            loop_periods_.resize(static_cast<std::size_t>(data_.size()));
+            for (Eigen::Index k = 0; k < data_.size(); ++k) loop_periods_[static_cast<std::size_t>(k)] = loop_period(loop_, data_.omega_e[k]);
+        }
     }
     const OperatingScale scale = tables_->scale;
     const Bounds base = base_parameter_bounds();
@@ -202,14 +206,67 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
     if (reads_temp_magnet_) s.temp_magnet = data_.temp_magnet->segment(first, n).array();
 }
 
+LoopPeriod loop_period(const CurrentLoop& loop, double omega) {
+    const bool integral = loop.corner_d > 0.0 && loop.corner_q > 0.0;
+    const double cd = integral ? loop.corner_d : 0.0, cq = integral ? loop.corner_q : 0.0, t = loop.period;
+    // A = m I + B, m = -(c_d + c_q) / 2, B = [[g, omega], [-omega, -g]], g = (c_q - c_d) / 2, B^2 = (g^2 - omega^2) I:
+    // e^{A t} = e^{m t} (C I + S B), C and S the cos and sin (or cosh and sinh) of the root.
+    const double m = -0.5 * (cd + cq), g = 0.5 * (cq - cd), square = g * g - omega * omega, z = square * t * t;
+    double c = 0.0, sn = 0.0;
+    if (std::abs(z) < 1e-4) {
+        c = 1.0 + z / 2.0 + z * z / 24.0;
+        sn = t * (1.0 + z / 6.0 + z * z / 120.0);
+    } else if (square < 0.0) {
+        const double root = std::sqrt(-square);
+        c = std::cos(root * t);
+        sn = std::sin(root * t) / root;
+    } else {
+        const double root = std::sqrt(square);
+        c = std::cosh(root * t);
+        sn = std::sinh(root * t) / root;
+    }
+    const double decay = std::exp(m * t);
+    LoopPeriod p{};
+    p.phi[0][0] = decay * (c + sn * g);
+    p.phi[0][1] = decay * sn * omega;
+    p.phi[1][0] = -decay * sn * omega;
+    p.phi[1][1] = decay * (c - sn * g);
+    // gamma = A^{-1} (e^{A t} - I), or its series where A t is small (no resistance, no speed).
+    const double a00 = -cd, a01 = omega, a10 = -omega, a11 = -cq;
+    const double size = std::max({std::abs(cd), std::abs(cq), std::abs(omega)}) * t;
+    if (size < 1e-6) {
+        const double h = 0.5 * t * t;
+        p.gamma[0][0] = t + h * a00;
+        p.gamma[0][1] = h * a01;
+        p.gamma[1][0] = h * a10;
+        p.gamma[1][1] = t + h * a11;
+    } else {
+        const double det = a00 * a11 - a01 * a10;
+        const double i00 = a11 / det, i01 = -a01 / det, i10 = -a10 / det, i11 = a00 / det;
+        const double e00 = p.phi[0][0] - 1.0, e01 = p.phi[0][1], e10 = p.phi[1][0], e11 = p.phi[1][1] - 1.0;
+        p.gamma[0][0] = i00 * e00 + i01 * e10;
+        p.gamma[0][1] = i00 * e01 + i01 * e11;
+        p.gamma[1][0] = i10 * e00 + i11 * e10;
+        p.gamma[1][1] = i10 * e01 + i11 * e11;
+    }
+    return p;
+}
+
 void pass_through_current_loop(const CurrentLoop& loop, const double* omega, const std::uint8_t* steps, double* w_d, double* w_q,
                                Eigen::Index n) {
+    std::vector<LoopPeriod> periods(static_cast<std::size_t>(n));
+    for (Eigen::Index k = 0; k < n; ++k) periods[static_cast<std::size_t>(k)] = loop_period(loop, omega[k]);
+    pass_through_current_loop(loop, periods.data(), omega, steps, w_d, w_q, n);
+}
+
+void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
+                               double* w_d, double* w_q, Eigen::Index n) {
     // x: the flux L i of the current the loop leaves (rotor frame, d and q), at the row's sample; y:
     // the PI's integral, a voltage. The machine: dx_d/dt = applied_d - law_d + omega x_q - c_d x_d,
-    // dx_q/dt = applied_q - law_q - omega x_d - c_q x_q (c: the corners R / L). The controller at a
-    // sample: -alpha x + y less the feed-forward's j omega x (d: -omega x_q, q: +omega x_d), then
-    // y -= alpha c T x. The model's rows hold R i + j omega L i of the current, so what it lacks of
-    // the reference is -alpha x + y - c x.
+    // dx_q/dt = applied_q - law_q - omega x_d - c_q x_q (c: the corners R / L), over a period
+    // loop_period. The controller at a sample: -alpha x + y less the feed-forward's j omega x (d:
+    // -omega x_q, q: +omega x_d), then y -= alpha c T x. The model's rows hold R i + j omega L i of
+    // the current, so what it lacks of the reference is -alpha x + y - c x.
     // Without both corners (a machine without resistance, or not known): a proportional loop.
     const bool integral = loop.corner_d > 0.0 && loop.corner_q > 0.0;
     const double alpha = loop.alpha, period = loop.period, cd = integral ? loop.corner_d : 0.0, cq = integral ? loop.corner_q : 0.0;
@@ -235,31 +292,17 @@ void pass_through_current_loop(const CurrentLoop& loop, const double* omega, con
             out_q = law_q;
         } else {
             const double w = omega[r - 1];
-            // RK4 over each period in substeps of at most a quarter of the fastest rate's time (the
-            // turning at omega, the decay at the corners): one on a drive, where both are slow
-            // beside the control rate.
-            const double fastest = std::max({std::abs(w), cd, cq});
-            const int substeps = std::max(1, static_cast<int>(std::ceil(4.0 * fastest * period)));
-            const double h = period / substeps;
+            const LoopPeriod& p = periods[r - 1];
             const double count = steps[r];
             for (int k = 0; k < steps[r]; ++k) {
                 // The law over the period: its mean on the line between the rows' values (the loss
                 // follows the current through the period, not its value at the period's start).
                 const double f = (k + 0.5) / count;
                 const double bd = applied_d - (before_d + (law_d - before_d) * f), bq = applied_q - (before_q + (law_q - before_q) * f);
-                auto slope = [&](double ad, double aq, double& sd, double& sq) {
-                    sd = bd + w * aq - cd * ad;
-                    sq = bq - w * ad - cq * aq;
-                };
-                for (int m = 0; m < substeps; ++m) {
-                    double k1d, k1q, k2d, k2q, k3d, k3q, k4d, k4q;
-                    slope(xd, xq, k1d, k1q);
-                    slope(xd + 0.5 * h * k1d, xq + 0.5 * h * k1q, k2d, k2q);
-                    slope(xd + 0.5 * h * k2d, xq + 0.5 * h * k2q, k3d, k3q);
-                    slope(xd + h * k3d, xq + h * k3q, k4d, k4q);
-                    xd += h / 6.0 * (k1d + 2.0 * k2d + 2.0 * k3d + k4d);
-                    xq += h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
-                }
+                const double nd = p.phi[0][0] * xd + p.phi[0][1] * xq + p.gamma[0][0] * bd + p.gamma[0][1] * bq;
+                const double nq = p.phi[1][0] * xd + p.phi[1][1] * xq + p.gamma[1][0] * bd + p.gamma[1][1] * bq;
+                xd = nd;
+                xq = nq;
                 applied_d = computed_d;
                 applied_q = computed_q;
                 computed_d = -alpha * xd + yd - w * xq;
@@ -327,7 +370,16 @@ void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, co
     effects_[effect]->model(which, p, s);
     s.u_d -= before_d.head(n);
     s.u_q -= before_q.head(n);
-    pass_through_current_loop(loop_, s.omega.data(), loop_steps_.data() + first, s.u_d.data(), s.u_q.data(), n);
+    const LoopPeriod* periods = nullptr;
+    if (!loop_periods_.empty()) {
+        periods = loop_periods_.data() + first;
+    } else {
+        thread_local std::vector<LoopPeriod> made;
+        made.resize(static_cast<std::size_t>(std::max(n, block_rows)));
+        for (Eigen::Index k = 0; k < n; ++k) made[static_cast<std::size_t>(k)] = loop_period(loop_, s.omega[k]);
+        periods = made.data();
+    }
+    pass_through_current_loop(loop_, periods, s.omega.data(), loop_steps_.data() + first, s.u_d.data(), s.u_q.data(), n);
     s.u_d += before_d.head(n);
     s.u_q += before_q.head(n);
 }
