@@ -384,7 +384,7 @@ TEST_CASE("a study that states the current loop tells each device drive's diagno
     auto spec = read_study(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "detection_study_5kw.toml");
     spec.only = "deadtime+rs_thermal";
     spec.seeds = {1};
-    spec.current_loop = true;
+    CHECK(spec.current_loop);  // the 5 kW study states it
     const StudyRun run = run_study(spec, study_cases(spec), DiagnosisOptions{});
     REQUIRE(run.records.size() == 1);
     // Winding heating's coefficient may be held at copper's value, which is the plant's.
