@@ -121,10 +121,6 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
                 loop_steps_[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(whole);
         }
         set_loop_corners();
-        if (data_.size() <= loop_periods_kept) {
-            loop_periods_.resize(static_cast<std::size_t>(data_.size()));
-            for (Eigen::Index k = 0; k < data_.size(); ++k) loop_periods_[static_cast<std::size_t>(k)] = loop_period(loop_, data_.omega_e[k]);
-        }
     }
     const OperatingScale scale = tables_->scale;
     const Bounds base = base_parameter_bounds();
@@ -370,16 +366,22 @@ void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, co
     effects_[effect]->model(which, p, s);
     s.u_d -= before_d.head(n);
     s.u_q -= before_q.head(n);
-    const LoopPeriod* periods = nullptr;
-    if (!loop_periods_.empty()) {
-        periods = loop_periods_.data() + first;
-    } else {
-        thread_local std::vector<LoopPeriod> made;
-        made.resize(static_cast<std::size_t>(std::max(n, block_rows)));
-        for (Eigen::Index k = 0; k < n; ++k) made[static_cast<std::size_t>(k)] = loop_period(loop_, s.omega[k]);
-        periods = made.data();
+    // Each row's period map at the mean speed of its operating point (a run of one segment within the
+    // block): the speed's noise turns the frame by microradians a period, and one map a run costs
+    // nothing beside the rows.
+    thread_local std::vector<LoopPeriod> periods;
+    periods.resize(static_cast<std::size_t>(std::max(n, block_rows)));
+    for (Eigen::Index begin = 0; begin < n;) {
+        Eigen::Index end = begin + 1;
+        if (data_.has_segments())
+            while (end < n && data_.segment[first + end] == data_.segment[first + begin]) ++end;
+        else
+            end = n;
+        const LoopPeriod map = loop_period(loop_, s.omega.segment(begin, end - begin).mean());
+        std::fill(periods.begin() + begin, periods.begin() + end, map);
+        begin = end;
     }
-    pass_through_current_loop(loop_, periods, s.omega.data(), loop_steps_.data() + first, s.u_d.data(), s.u_q.data(), n);
+    pass_through_current_loop(loop_, periods.data(), s.omega.data(), loop_steps_.data() + first, s.u_d.data(), s.u_q.data(), n);
     s.u_d += before_d.head(n);
     s.u_q += before_q.head(n);
 }

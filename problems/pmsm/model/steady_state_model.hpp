@@ -74,8 +74,8 @@ LoopPeriod loop_period(const CurrentLoop& loop, double omega);
 
 void pass_through_current_loop(const CurrentLoop& loop, const double* omega, const std::uint8_t* steps, double* w_d, double* w_q,
                                Eigen::Index n);
-// The same with each row's period taken from `periods` (loop_period at the row's speed): a model
-// makes them once for its rows.
+// The same with each row's period taken from `periods` (loop_period at the speed of the row's
+// operating point: a model makes one a segment).
 void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
                                double* w_d, double* w_q, Eigen::Index n);
 
@@ -101,10 +101,7 @@ public:
     // Evaluates the model at these speeds instead of the logged omega_e (one per row; nullptr: the
     // logged ones). The dynamic model predicts a step at the speed over the step, not at its first row.
     // `speed` must outlive the model.
-    void set_speed(const Eigen::VectorXd* speed) {
-        speed_ = speed;
-        loop_periods_.clear();  // made at the logged speed; the blocks now make theirs from `speed`
-    }
+    void set_speed(const Eigen::VectorXd* speed) { speed_ = speed; }
     // Runs no effect at this stage: the dynamic model has its own L di/dt, so it leaves out the
     // steady state's stand-in for a ripple's (ModelStage::CurrentRipple).
     void leave_out(ModelStage stage) { stages_ &= ~static_cast<unsigned>(stage); }
@@ -199,10 +196,6 @@ private:
     std::vector<bool> through_loop_;
     // Per row, the control periods since the row before, for the stated loop (empty without one).
     std::vector<std::uint8_t> loop_steps_;
-    // Per row, loop_period at its speed, made once for logs of up to loop_periods_kept rows (64 bytes
-    // a row); a longer log's blocks make theirs as they run.
-    static constexpr Eigen::Index loop_periods_kept = Eigen::Index{1} << 18;
-    std::vector<LoopPeriod> loop_periods_;
     // Temperatures are copied into a block's state only for an effect that lists them
     // (Effect::model_columns): each pass over a long log reads every column it loads from memory.
     bool reads_temp_winding_ = false, reads_temp_magnet_ = false;
