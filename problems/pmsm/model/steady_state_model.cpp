@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "framework/input_error.hpp"
+#include "problems/pmsm/machine/machine.hpp"
 
 namespace mhb::pmsm {
 
@@ -331,14 +332,12 @@ void SteadyStateModel::set_loop_corners() {
     Vector5d moment = Vector5d::Zero();
     for (Eigen::Index k = 0; k < data_.size(); ++k) {
         const double id = data_.i_d[k], iq = data_.i_q[k], w = data_.omega_e[k];
-        const double c = tables_->cos[k], s = tables_->sin[k];
-        const double ia = id * c - iq * s, ib = id * s + iq * c;  // alpha-beta
-        const double a = std::copysign(1.0, ia), b = std::copysign(1.0, -0.5 * ia + 0.5 * std::numbers::sqrt3 * ib),
-                     cc = std::copysign(1.0, -0.5 * ia - 0.5 * std::numbers::sqrt3 * ib);
-        const double sa = (2.0 * a - b - cc) / 3.0, sb = (b - cc) / std::numbers::sqrt3;
+        const Complex turn(tables_->cos[k], tables_->sin[k]);  // the table's angle, as park and inverse_park turn
+        const auto phase = inverse_clarke(Complex(id, iq) * turn);
+        const Complex sign = clarke(std::copysign(1.0, phase[0]), std::copysign(1.0, phase[1]), std::copysign(1.0, phase[2])) * std::conj(turn);
         Vector5d row_d, row_q;
-        row_d << id, 0.0, -w * iq, 0.0, sa * c + sb * s;
-        row_q << iq, w * id, 0.0, w, -sa * s + sb * c;
+        row_d << id, 0.0, -w * iq, 0.0, sign.real();
+        row_q << iq, w * id, 0.0, w, sign.imag();
         gram.noalias() += row_d * row_d.transpose() + row_q * row_q.transpose();
         moment.noalias() += row_d * data_.u_d[k] + row_q * data_.u_q[k];
     }
