@@ -38,6 +38,14 @@ std::complex<double> continuous_response(double alpha, double tau, double omega,
     return alpha / (a * std::exp(-1i * omega_h * tau) + 1i * (omega_h + omega));
 }
 
+// The model's loop over rows at each row's own speed, each period's map made at it.
+void pass_through(const CurrentLoop& loop, const std::vector<double>& speed, const std::vector<std::uint8_t>& steps, std::vector<double>& w_d,
+                  std::vector<double>& w_q) {
+    std::vector<LoopPeriod> periods;
+    for (const double omega : speed) periods.push_back(loop_period(loop, omega));
+    pass_through_current_loop(loop, periods.data(), speed.data(), steps.data(), w_d.data(), w_q.data(), static_cast<Eigen::Index>(speed.size()));
+}
+
 // The model's loop on a law e^{j omega_h t} sampled every control period, `rows` rows of one run:
 // the phasor of what it puts in the reference over the last half of the rows.
 std::complex<double> filtered_phasor(const CurrentLoop& loop, double omega, double omega_h, Eigen::Index rows) {
@@ -48,7 +56,7 @@ std::complex<double> filtered_phasor(const CurrentLoop& loop, double omega, doub
         w_d[static_cast<std::size_t>(k)] = law.real();
         w_q[static_cast<std::size_t>(k)] = law.imag();
     }
-    pass_through_current_loop(loop, speed.data(), steps.data(), w_d.data(), w_q.data(), rows);
+    pass_through(loop, speed, steps, w_d, w_q);
     std::complex<double> sum = 0.0;
     for (Eigen::Index k = rows / 2; k < rows; ++k)
         sum += std::complex<double>(w_d[static_cast<std::size_t>(k)], w_q[static_cast<std::size_t>(k)]) *
@@ -119,7 +127,7 @@ TEST_CASE("the model's loop is what a simulated loop logs beyond what its curren
             applied_q = output_q;
         }
         const CurrentLoop loop{c.alpha, period, c.resistance / c.ld, c.resistance / c.lq};
-        pass_through_current_loop(loop, speed.data(), steps.data(), w_d.data(), w_q.data(), rows);
+        pass_through(loop, speed, steps, w_d, w_q);
         // Compared once both starts have settled (the model starts at the loop's steady state, the
         // simulation at zero current).
         double worst = 0.0;
@@ -169,9 +177,9 @@ TEST_CASE("a run of the model's loop starts again at a row that does not follow 
     }
     std::vector<std::uint8_t> steps(100, 1);
     auto joined_d = w_d, joined_q = w_q;
-    pass_through_current_loop(loop, speed.data(), steps.data(), joined_d.data(), joined_q.data(), 100);
+    pass_through(loop, speed, steps, joined_d, joined_q);
     steps[50] = 0;
-    pass_through_current_loop(loop, speed.data(), steps.data(), w_d.data(), w_q.data(), 100);
+    pass_through(loop, speed, steps, w_d, w_q);
     // Joined, the loop lags the step; started again, the row is the law itself.
     CHECK(std::abs(joined_d[50] - -1.0) > 0.5);
     CHECK(w_d[50] == Approx(-1.0).margin(1e-12));

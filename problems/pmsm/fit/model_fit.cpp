@@ -18,6 +18,7 @@
 #include "framework/random.hpp"
 #include "framework/registry.hpp"
 #include "framework/trial.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
 namespace {
@@ -911,7 +912,7 @@ Measurement model_rows(const SteadyStateModel& model, const std::vector<Eigen::I
             out.t = Eigen::VectorXd((*data.t)(rows));
         } else {
             out.t = Eigen::VectorXd(static_cast<Eigen::Index>(rows.size()));
-            for (std::size_t k = 0; k < rows.size(); ++k) (*out.t)[static_cast<Eigen::Index>(k)] = static_cast<double>(rows[k]) * data.current_loop_delay / 1.5;
+            for (std::size_t k = 0; k < rows.size(); ++k) (*out.t)[static_cast<Eigen::Index>(k)] = static_cast<double>(rows[k]) * current_loop_period(data);
         }
     }
     out.i_d = data.i_d(rows);

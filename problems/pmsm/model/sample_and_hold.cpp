@@ -108,6 +108,8 @@ void state_current_loop(Measurement& data, const DriveTiming& timing) {
     data.current_loop_delay = 1.5 * timing.control_period;
 }
 
+double current_loop_period(const Measurement& data) { return data.current_loop_delay / 1.5; }
+
 std::string current_loop_text(double bandwidth, double delay) {
     if (!(bandwidth > 0.0)) return {};
     return fmt::format("current loop: {:g} Hz, its delay {:g} µs (dead time's and flux harmonics' voltages reach the logged one "

@@ -38,6 +38,8 @@ struct DriveTiming {
 // model/steady_state_model.hpp), the loop's delay taken as 1.5 control periods (a period to compute,
 // half a period of holding).
 void state_current_loop(Measurement& data, const DriveTiming& timing);
+// The control period of the loop `data` state (its delay less the half period of holding); 0 without one.
+double current_loop_period(const Measurement& data);
 // "current loop: 400 Hz, its delay 187.5 µs (...)" and a newline, for a stated loop; empty otherwise.
 std::string current_loop_text(double bandwidth, double delay);
 

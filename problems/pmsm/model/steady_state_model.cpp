@@ -15,6 +15,7 @@
 
 #include "framework/input_error.hpp"
 #include "problems/pmsm/machine/machine.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
 
@@ -97,7 +98,7 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
       }) {
     tables_ = SharedTables::of(data_);
     loop_.alpha = 2.0 * std::numbers::pi * data_.current_loop_bandwidth;
-    loop_.period = data_.current_loop_delay / 1.5;  // state_current_loop: the delay is 1.5 control periods
+    loop_.period = current_loop_period(data_);
     bool any_through_loop = false;
     for (const auto& e : effects_) {
         const std::vector<int> orders = e->angle_orders();
@@ -204,8 +205,7 @@ void SteadyStateModel::load(ModelState& s, Eigen::Index first) const {
 }
 
 LoopPeriod loop_period(const CurrentLoop& loop, double omega) {
-    const bool integral = loop.corner_d > 0.0 && loop.corner_q > 0.0;
-    const double cd = integral ? loop.corner_d : 0.0, cq = integral ? loop.corner_q : 0.0, t = loop.period;
+    const double cd = loop.integral_corner_d(), cq = loop.integral_corner_q(), t = loop.period;
     // A = m I + B, m = -(c_d + c_q) / 2, B = [[g, omega], [-omega, -g]], g = (c_q - c_d) / 2, B^2 = (g^2 - omega^2) I:
     // e^{A t} = e^{m t} (C I + S B), C and S the cos and sin (or cosh and sinh) of the root.
     const double m = -0.5 * (cd + cq), g = 0.5 * (cq - cd), square = g * g - omega * omega, z = square * t * t;
@@ -249,13 +249,6 @@ LoopPeriod loop_period(const CurrentLoop& loop, double omega) {
     return p;
 }
 
-void pass_through_current_loop(const CurrentLoop& loop, const double* omega, const std::uint8_t* steps, double* w_d, double* w_q,
-                               Eigen::Index n) {
-    std::vector<LoopPeriod> periods(static_cast<std::size_t>(n));
-    for (Eigen::Index k = 0; k < n; ++k) periods[static_cast<std::size_t>(k)] = loop_period(loop, omega[k]);
-    pass_through_current_loop(loop, periods.data(), omega, steps, w_d, w_q, n);
-}
-
 void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
                                double* w_d, double* w_q, Eigen::Index n) {
     // x: the flux L i of the current the loop leaves (rotor frame, d and q), at the row's sample; y:
@@ -264,9 +257,8 @@ void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* period
     // loop_period. The controller at a sample: -alpha x + y less the feed-forward's j omega x (d:
     // -omega x_q, q: +omega x_d), then y -= alpha c T x. The model's rows hold R i + j omega L i of
     // the current, so what it lacks of the reference is -alpha x + y - c x.
-    // Without both corners (a machine without resistance, or not known): a proportional loop.
-    const bool integral = loop.corner_d > 0.0 && loop.corner_q > 0.0;
-    const double alpha = loop.alpha, period = loop.period, cd = integral ? loop.corner_d : 0.0, cq = integral ? loop.corner_q : 0.0;
+    const bool integral = loop.integral();
+    const double alpha = loop.alpha, period = loop.period, cd = loop.integral_corner_d(), cq = loop.integral_corner_q();
     double xd = 0.0, xq = 0.0, yd = 0.0, yq = 0.0, applied_d = 0.0, applied_q = 0.0, computed_d = 0.0, computed_q = 0.0;
     double before_d = 0.0, before_q = 0.0, out_d = 0.0, out_q = 0.0;
     for (Eigen::Index r = 0; r < n; ++r) {

@@ -51,17 +51,13 @@ struct CurrentLoop {
     double period = 0.0;  // s: the control period
     // 1/s: R / L_d and R / L_q, the corners of the PI's integral and of the machine's own decay.
     double corner_d = 0.0, corner_q = 0.0;
+    // Without both corners (a machine without resistance, or not known) the loop is proportional:
+    // no integral, and the machine's own decay left out with it.
+    bool integral() const { return corner_d > 0.0 && corner_q > 0.0; }
+    double integral_corner_d() const { return integral() ? corner_d : 0.0; }
+    double integral_corner_q() const { return integral() ? corner_q : 0.0; }
 };
 
-// What the loop puts into its logged reference of an effect's voltage, in time: `w_d`, `w_q` hold the
-// voltage the effect takes from the machine (its law's value) at consecutive rows, and on return what
-// the logged reference holds of it beyond what the current it leaves carries through the
-// steady-state model (which predicts each row from the row's own current, so R i + j omega L i of
-// that current is in it already). `steps[r]` counts the control periods from row r - 1 to row r
-// (0: row r starts a run, taken at the loop's steady state, where the reference holds the whole law),
-// `omega` is each row's electrical speed. Over a period the law is its mean on the line between the
-// rows' values. Written in the flux the loop leaves, L i, the inductances enter only through the
-// corners. docs/diagnosis.md, section 8.
 // What a control period does to the flux the loop leaves, x = L i (d, q) at speed omega with the
 // voltage b held: x(T) = phi x(0) + gamma b, exact (dx/dt = A x + b, A = [[-c_d, omega],
 // [-omega, -c_q]]: the turning of the rotor frame and, with the loop's integral, the decay at the
@@ -72,10 +68,16 @@ struct LoopPeriod {
 };
 LoopPeriod loop_period(const CurrentLoop& loop, double omega);
 
-void pass_through_current_loop(const CurrentLoop& loop, const double* omega, const std::uint8_t* steps, double* w_d, double* w_q,
-                               Eigen::Index n);
-// The same with each row's period taken from `periods` (loop_period at the speed of the row's
-// operating point: a model makes one a segment).
+// What the loop puts into its logged reference of an effect's voltage, in time: `w_d`, `w_q` hold the
+// voltage the effect takes from the machine (its law's value) at consecutive rows, and on return what
+// the logged reference holds of it beyond what the current it leaves carries through the
+// steady-state model (which predicts each row from the row's own current, so R i + j omega L i of
+// that current is in it already). `steps[r]` counts the control periods from row r - 1 to row r
+// (0: row r starts a run, taken at the loop's steady state, where the reference holds the whole law),
+// `omega` is each row's electrical speed. Over a period the law is its mean on the line between the
+// rows' values. Written in the flux the loop leaves, L i, the inductances enter only through the
+// corners. docs/diagnosis.md, section 8. Row r - 1's period is `periods[r - 1]` (loop_period at the
+// speed of the row's operating point: a model makes one a segment).
 void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
                                double* w_d, double* w_q, Eigen::Index n);
 
