@@ -250,7 +250,7 @@ LoopPeriod loop_period(const CurrentLoop& loop, double omega) {
 }
 
 void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
-                               double* w_d, double* w_q, Eigen::Index n) {
+                               double* w_d, double* w_q, Eigen::Index n, double* left_d, double* left_q) {
     // x: the flux L i of the current the loop leaves (rotor frame, d and q), at the row's sample; y:
     // the PI's integral, a voltage. The machine: dx_d/dt = applied_d - law_d + omega x_q - c_d x_d,
     // dx_q/dt = applied_q - law_q - omega x_d - c_q x_q (c: the corners R / L), over a period
@@ -308,6 +308,10 @@ void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* period
         before_q = law_q;
         w_d[r] = out_d;
         w_q[r] = out_q;
+        if (left_d != nullptr) {
+            left_d[r] = xd;
+            left_q[r] = xq;
+        }
     }
 }
 
@@ -341,27 +345,37 @@ void SteadyStateModel::set_loop_corners() {
     if (base.allFinite() && base[0] > 0.0 && base[1] > 0.0 && base[2] > 0.0) {
         loop_.corner_d = base[0] / base[1];
         loop_.corner_q = base[0] / base[2];
+        loop_ld_ = base[1];
+        loop_lq_ = base[2];
     }
 }
 
 void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, const double* p, ModelState& s, Eigen::Index first) const {
-    // The effect's own voltage over the block: what it adds to what the stages before made.
-    thread_local Eigen::ArrayXd before_d, before_q;
+    const Effect& e = *effects_[effect];
     const Eigen::Index n = s.size();
-    if (before_d.size() < n) {
-        before_d.resize(block_rows > n ? block_rows : n);
-        before_q.resize(before_d.size());
+    // Per block size a thread meets (a log's blocks and its tail): the state the law is taken at
+    // for the loop.
+    struct LoopLaw {
+        ModelState state;
+        Eigen::ArrayXd mean_i_d, mean_i_q, mean_psi_d, mean_psi_q, left_d, left_q, law_d, law_q;
+    };
+    thread_local std::vector<LoopLaw> laws;
+    auto found = std::find_if(laws.begin(), laws.end(), [&](const LoopLaw& l) { return l.law_d.size() == n; });
+    LoopLaw& l = found != laws.end() ? *found : laws.emplace_back();
+    if (l.law_d.size() != n) {
+        l.state.resize(n);
+        for (auto* a : {&l.mean_i_d, &l.mean_i_q, &l.mean_psi_d, &l.mean_psi_q, &l.left_d, &l.left_q, &l.law_d, &l.law_q})
+            a->resize(n);
     }
-    before_d.head(n) = s.u_d;
-    before_q.head(n) = s.u_q;
-    effects_[effect]->model(which, p, s);
-    s.u_d -= before_d.head(n);
-    s.u_q -= before_q.head(n);
-    // Each row's period map at the mean speed of its operating point (a run of one segment within the
-    // block): the speed's noise turns the frame by microradians a period, and one map a run costs
-    // nothing beside the rows.
+    // Each row keeps the law's own value at its measured state; the loop adds what it makes of the law
+    // beyond that.
+    e.model(which, p, s);
+    // Runs of one operating point (a segment within the block), each with its period map at the
+    // run's mean speed (the speed's noise turns the frame by microradians a period).
     thread_local std::vector<LoopPeriod> periods;
+    thread_local std::vector<Eigen::Index> run_ends;
     periods.resize(static_cast<std::size_t>(std::max(n, block_rows)));
+    run_ends.clear();
     for (Eigen::Index begin = 0; begin < n;) {
         Eigen::Index end = begin + 1;
         if (data_.has_segments())
@@ -370,11 +384,71 @@ void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, co
             end = n;
         const LoopPeriod map = loop_period(loop_, s.omega.segment(begin, end - begin).mean());
         std::fill(periods.begin() + begin, periods.begin() + end, map);
+        run_ends.push_back(end);
         begin = end;
     }
-    pass_through_current_loop(loop_, periods.data(), s.omega.data(), loop_steps_.data() + first, s.u_d.data(), s.u_q.data(), n);
-    s.u_d += before_d.head(n);
-    s.u_q += before_q.head(n);
+    // What the loop makes of the law is taken at the current less its sensors' noise: the run's mean
+    // state plus the ripple the loop itself leaves (x / L, found by a first pass at the mean state).
+    // At each row's measured current a law that follows the current (a dead-time band wide enough to
+    // be a resistance) would copy the sensors' noise into the loop, whose answer to it is delay's
+    // signature; at the mean state alone the zero crossings sit where the ripple does not move them
+    // (docs/diagnosis.md, section 8).
+    ModelState& g = l.state;
+    g.theta = s.theta;
+    g.cos_theta = s.cos_theta;
+    g.sin_theta = s.sin_theta;
+    g.ld = s.ld;
+    g.lq = s.lq;
+    g.temp_winding.resize(s.temp_winding.size());
+    g.temp_magnet.resize(s.temp_magnet.size());
+    const auto for_each_run = [&](auto&& f) {
+        Eigen::Index begin = 0;
+        for (const Eigen::Index end : run_ends) {
+            f(begin, end - begin);
+            begin = end;
+        }
+    };
+    for_each_run([&](Eigen::Index begin, Eigen::Index rows) {
+        for (auto [to, from] : {std::pair{&g.i_d, &s.i_d}, std::pair{&g.i_q, &s.i_q}, std::pair{&g.omega, &s.omega}, std::pair{&g.rs, &s.rs},
+                                std::pair{&g.psi_f, &s.psi_f}, std::pair{&g.psi_d, &s.psi_d}, std::pair{&g.psi_q, &s.psi_q},
+                                std::pair{&g.temp_winding, &s.temp_winding}, std::pair{&g.temp_magnet, &s.temp_magnet}})
+            if (from->size() > 0) to->segment(begin, rows).setConstant(from->segment(begin, rows).mean());
+    });
+    const bool ripple = loop_ld_ > 0.0 && loop_lq_ > 0.0;
+    if (ripple) {
+        l.mean_i_d = g.i_d;
+        l.mean_i_q = g.i_q;
+        l.mean_psi_d = g.psi_d;
+        l.mean_psi_q = g.psi_q;
+    }
+    // One refinement: the ripple of the law at the mean state. Further passes alternate about the
+    // fixed point rather than settle on it (noise-free 5 kW dead time, docs/diagnosis.md, section 8),
+    // each at the cost of another run of the loop's rows.
+    const int passes = ripple ? 2 : 1;
+    for (int pass = 0; pass < passes; ++pass) {
+        if (pass == 1) {
+            // The ripple: the flux the loop leaves, less its run's mean (a proportional loop's offset
+            // is in the measured mean already).
+            for_each_run([&](Eigen::Index begin, Eigen::Index rows) {
+                l.left_d.segment(begin, rows) -= l.left_d.segment(begin, rows).mean();
+                l.left_q.segment(begin, rows) -= l.left_q.segment(begin, rows).mean();
+            });
+            g.i_d = l.mean_i_d + l.left_d / loop_ld_;
+            g.i_q = l.mean_i_q + l.left_q / loop_lq_;
+            g.psi_d = l.mean_psi_d + l.left_d;
+            g.psi_q = l.mean_psi_q + l.left_q;
+        }
+        g.u_d.setZero();
+        g.u_q.setZero();
+        e.model(which, p, g);
+        l.law_d = g.u_d;
+        l.law_q = g.u_q;
+        const bool last = pass + 1 == passes;
+        pass_through_current_loop(loop_, periods.data(), s.omega.data(), loop_steps_.data() + first, g.u_d.data(), g.u_q.data(), n,
+                                  last ? nullptr : l.left_d.data(), last ? nullptr : l.left_q.data());
+    }
+    s.u_d += g.u_d - l.law_d;
+    s.u_q += g.u_q - l.law_q;
 }
 
 void SteadyStateModel::run_stage(ModelStage which, const double* p, ModelState& s, bool base_lane, Eigen::Index first) const {

@@ -77,9 +77,10 @@ LoopPeriod loop_period(const CurrentLoop& loop, double omega);
 // `omega` is each row's electrical speed. Over a period the law is its mean on the line between the
 // rows' values. Written in the flux the loop leaves, L i, the inductances enter only through the
 // corners. docs/diagnosis.md, section 8. Row r - 1's period is `periods[r - 1]` (loop_period at the
-// speed of the row's operating point: a model makes one a segment).
+// speed of the row's operating point: a model makes one a segment). `left_d`, `left_q`, when given,
+// receive x at each row's sample.
 void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
-                               double* w_d, double* w_q, Eigen::Index n);
+                               double* w_d, double* w_q, Eigen::Index n, double* left_d = nullptr, double* left_q = nullptr);
 
 class SteadyStateModel {
 public:
@@ -192,6 +193,7 @@ private:
     // The stated current loop (alpha 0: none), its corners from the base model's least-squares fit
     // to all rows of the data.
     CurrentLoop loop_;
+    double loop_ld_ = 0.0, loop_lq_ = 0.0;  // H: the same fit's inductances, which turn the loop's flux into current
     // Per effect, whether its voltage goes through the stated loop: when the log states the loop and
     // the angle, for an effect that declares the harmonic orders of the angle its voltage has (dead
     // time, flux harmonics; not one that declares none or every order).
