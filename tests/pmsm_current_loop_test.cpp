@@ -39,12 +39,11 @@ std::complex<double> continuous_response(double alpha, double tau, double omega,
     return alpha / (a * std::exp(-1i * omega_h * tau) + 1i * (omega_h + omega));
 }
 
-// The model's loop over rows at each row's own speed, each period's map made at it.
+// The model's loop over rows at one speed, the period's map made at the first row's.
 void pass_through(const CurrentLoop& loop, const std::vector<double>& speed, const std::vector<std::uint8_t>& steps, std::vector<double>& w_d,
                   std::vector<double>& w_q) {
-    std::vector<LoopPeriod> periods;
-    for (const double omega : speed) periods.push_back(loop_period(loop, omega));
-    pass_through_current_loop(loop, periods.data(), speed.data(), steps.data(), w_d.data(), w_q.data(), static_cast<Eigen::Index>(speed.size()));
+    pass_through_current_loop(loop, loop_period(loop, speed.front()), speed.data(), steps.data(), w_d.data(), w_q.data(),
+                              static_cast<Eigen::Index>(speed.size()));
 }
 
 // The model's loop on a law e^{j omega_h t} sampled every control period, `rows` rows of one run:

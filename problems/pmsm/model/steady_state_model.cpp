@@ -249,8 +249,8 @@ LoopPeriod loop_period(const CurrentLoop& loop, double omega) {
     return p;
 }
 
-void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
-                               double* w_d, double* w_q, Eigen::Index n, double* left_d, double* left_q) {
+void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod& p, const double* omega, const std::uint8_t* steps, double* w_d,
+                               double* w_q, Eigen::Index n, double* left_d, double* left_q) {
     // x: the flux L i of the current the loop leaves (rotor frame, d and q), at the row's sample; y:
     // the PI's integral, a voltage. The machine: dx_d/dt = applied_d - law_d + omega x_q - c_d x_d,
     // dx_q/dt = applied_q - law_q - omega x_d - c_q x_q (c: the corners R / L), over a period
@@ -281,7 +281,6 @@ void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* period
             out_q = law_q;
         } else {
             const double w = omega[r - 1];
-            const LoopPeriod& p = periods[r - 1];
             const double count = steps[r];
             for (int k = 0; k < steps[r]; ++k) {
                 // The law over the period: its mean on the line between the rows' values (the loss
@@ -370,11 +369,12 @@ void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, co
     // Each row keeps the law's own value at its measured state; the loop adds what it makes of the law
     // beyond that.
     e.model(which, p, s);
-    // Runs of one operating point (a segment within the block), each with its period map at the
-    // run's mean speed (the speed's noise turns the frame by microradians a period).
+    // Runs of one operating point (a segment within the block, which starts a run of the loop), each
+    // with its period map at the run's mean speed (the speed's noise turns the frame by microradians
+    // a period).
     thread_local std::vector<LoopPeriod> periods;
     thread_local std::vector<Eigen::Index> run_ends;
-    periods.resize(static_cast<std::size_t>(std::max(n, block_rows)));
+    periods.clear();
     run_ends.clear();
     for (Eigen::Index begin = 0; begin < n;) {
         Eigen::Index end = begin + 1;
@@ -382,8 +382,7 @@ void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, co
             while (end < n && data_.segment[first + end] == data_.segment[first + begin]) ++end;
         else
             end = n;
-        const LoopPeriod map = loop_period(loop_, s.omega.segment(begin, end - begin).mean());
-        std::fill(periods.begin() + begin, periods.begin() + end, map);
+        periods.push_back(loop_period(loop_, s.omega.segment(begin, end - begin).mean()));
         run_ends.push_back(end);
         begin = end;
     }
@@ -444,8 +443,12 @@ void SteadyStateModel::run_through_loop(std::size_t effect, ModelStage which, co
         l.law_d = g.u_d;
         l.law_q = g.u_q;
         const bool last = pass + 1 == passes;
-        pass_through_current_loop(loop_, periods.data(), s.omega.data(), loop_steps_.data() + first, g.u_d.data(), g.u_q.data(), n,
-                                  last ? nullptr : l.left_d.data(), last ? nullptr : l.left_q.data());
+        std::size_t run = 0;
+        for_each_run([&](Eigen::Index begin, Eigen::Index rows) {
+            pass_through_current_loop(loop_, periods[run++], s.omega.data() + begin, loop_steps_.data() + first + begin, g.u_d.data() + begin,
+                                      g.u_q.data() + begin, rows, last ? nullptr : l.left_d.data() + begin,
+                                      last ? nullptr : l.left_q.data() + begin);
+        });
     }
     s.u_d += g.u_d - l.law_d;
     s.u_q += g.u_q - l.law_q;

@@ -76,10 +76,10 @@ LoopPeriod loop_period(const CurrentLoop& loop, double omega);
 // (0: row r starts a run, taken at the loop's steady state, where the reference holds the whole law),
 // `omega` is each row's electrical speed. Over a period the law is its mean on the line between the
 // rows' values. Written in the flux the loop leaves, L i, the inductances enter only through the
-// corners. docs/diagnosis.md, section 8. Row r - 1's period is `periods[r - 1]` (loop_period at the
-// speed of the row's operating point: a model makes one a segment). `left_d`, `left_q`, when given,
-// receive x at each row's sample.
-void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod* periods, const double* omega, const std::uint8_t* steps,
+// corners. docs/diagnosis.md, section 8. Every period is `period` (loop_period at the speed of the
+// rows' operating point: a model passes one operating point's run at a time). `left_d`, `left_q`,
+// when given, receive x at each row's sample.
+void pass_through_current_loop(const CurrentLoop& loop, const LoopPeriod& period, const double* omega, const std::uint8_t* steps,
                                double* w_d, double* w_q, Eigen::Index n, double* left_d = nullptr, double* left_q = nullptr);
 
 class SteadyStateModel {
