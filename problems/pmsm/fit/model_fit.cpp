@@ -912,7 +912,8 @@ Measurement model_rows(const SteadyStateModel& model, const std::vector<Eigen::I
             out.t = Eigen::VectorXd((*data.t)(rows));
         } else {
             out.t = Eigen::VectorXd(static_cast<Eigen::Index>(rows.size()));
-            for (std::size_t k = 0; k < rows.size(); ++k) (*out.t)[static_cast<Eigen::Index>(k)] = static_cast<double>(rows[k]) * current_loop_period(data);
+            const double period = current_loop_period(data);
+            for (std::size_t k = 0; k < rows.size(); ++k) (*out.t)[static_cast<Eigen::Index>(k)] = static_cast<double>(rows[k]) * period;
         }
     }
     out.i_d = data.i_d(rows);
