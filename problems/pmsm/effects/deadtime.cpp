@@ -16,32 +16,45 @@
 namespace mhb::pmsm {
 namespace {
 
-// Voltage lost at the terminals, in the rotor frame, from the three phase currents: one set of
-// parameters, evaluated per sample by at(). Written in real arithmetic because complex products keep a
-// NaN branch that stops the model's loop over a block of rows from vectorising.
-class TerminalLoss {
-public:
-    TerminalLoss(double voltage, double band) : voltage_(voltage), band_(band), per_ampere_(band > 0.0 ? 1.0 / band : 0.0) {}
-
-    // (cos_theta, sin_theta) = e^{j theta}; i_d, i_q the rotor-frame currents.
-    Complex at(double cos_theta, double sin_theta, double i_d, double i_q) const {
-        const double alpha = i_d * cos_theta - i_q * sin_theta, beta = i_d * sin_theta + i_q * cos_theta;
-        const double half_root3 = 0.5 * std::numbers::sqrt3;
-        const double a = sign(alpha), b = sign(-0.5 * alpha + half_root3 * beta), c = sign(-0.5 * alpha - half_root3 * beta);
-        // Clarke of the phase losses, then into the rotor frame.
-        const double loss_alpha = voltage_ * (2.0 * a - b - c) / 3.0, loss_beta = voltage_ * (b - c) / std::numbers::sqrt3;
-        return {loss_alpha * cos_theta + loss_beta * sin_theta, loss_beta * cos_theta - loss_alpha * sin_theta};
-    }
-
-private:
-    // A phase current's direction, turning through zero over the band.
-    double sign(double i) const {
-        if (band_ > 0.0) { const double x = i * per_ampere_; return x / std::sqrt(1.0 + x * x); }
-        return i > 0.0 ? 1.0 : (i < 0.0 ? -1.0 : 0.0);
-    }
-
-    double voltage_, band_, per_ampere_;
+// A phase current's direction: a sign, or turning through zero over a band (i / sqrt(i^2 + b^2)).
+// Branch-free, so that the model's loop over a block of rows vectorises.
+struct HardSign {
+    double operator()(double i) const { return static_cast<double>(i > 0.0) - static_cast<double>(i < 0.0); }
 };
+struct BandSign {
+    double per_ampere;
+    double operator()(double i) const {
+        const double x = i * per_ampere;
+        return x / std::sqrt(1.0 + x * x);
+    }
+};
+// f called with the direction a band asks for (0: a sign).
+template <class F>
+decltype(auto) with_sign(double band, F&& f) {
+    return band > 0.0 ? f(BandSign{1.0 / band}) : f(HardSign{});
+}
+
+// Voltage lost at the terminals, in the rotor frame, from the three phase currents: (cos_theta,
+// sin_theta) = e^{j theta}; i_d, i_q the rotor-frame currents. Written in real arithmetic because
+// complex products keep a NaN branch that stops the model's loop from vectorising.
+template <class Sign>
+[[gnu::always_inline]] inline Complex terminal_loss(double voltage, Sign sign, double cos_theta, double sin_theta, double i_d, double i_q) {
+    const double alpha = i_d * cos_theta - i_q * sin_theta, beta = i_d * sin_theta + i_q * cos_theta;
+    const double half_root3 = 0.5 * std::numbers::sqrt3;
+    const double a = sign(alpha), b = sign(-0.5 * alpha + half_root3 * beta), c = sign(-0.5 * alpha - half_root3 * beta);
+    // Clarke of the phase losses, then into the rotor frame.
+    const double loss_alpha = voltage * (2.0 * a - b - c) / 3.0, loss_beta = voltage * (b - c) / std::numbers::sqrt3;
+    return {loss_alpha * cos_theta + loss_beta * sin_theta, loss_beta * cos_theta - loss_alpha * sin_theta};
+}
+
+template <class Sign>
+void add_terminal_loss(double voltage, Sign sign, ModelState& s) {
+    for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
+        const Complex l = terminal_loss(voltage, sign, s.cos_theta[k], s.sin_theta[k], s.i_d[k], s.i_q[k]);
+        s.u_d[k] += l.real();
+        s.u_q[k] += l.imag();
+    }
+}
 
 inline constexpr double max_band_fraction = 0.2;
 
@@ -50,7 +63,7 @@ public:
     explicit DeadTime(const ParameterSet& p) : Effect("deadtime", p) {}
 
     Complex plant_inverter_loss(double theta, Complex i) const override {
-        return TerminalLoss(values()[0], values()[1]).at(std::cos(theta), std::sin(theta), i.real(), i.imag());
+        return with_sign(values()[1], [&](auto sign) { return terminal_loss(values()[0], sign, std::cos(theta), std::sin(theta), i.real(), i.imag()); });
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
@@ -92,12 +105,7 @@ public:
 
     void model(ModelStage, const double* p, ModelState& s) const override {
         if (s.theta.size() > 0) {
-            const TerminalLoss loss(p[0], p[1]);
-            for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-                const Complex l = loss.at(s.cos_theta[k], s.sin_theta[k], s.i_d[k], s.i_q[k]);
-                s.u_d[k] += l.real();
-                s.u_q[k] += l.imag();
-            }
+            with_sign(p[1], [&](auto sign) { add_terminal_loss(p[0], sign, s); });
             return;
         }
         // Without the angle only the fundamental is known: (4/pi) V_dt along the current.
