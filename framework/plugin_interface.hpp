@@ -21,7 +21,8 @@
 // 13: Effect gained angle_orders (a virtual: the harmonics of the electrical angle its law makes).
 // 14: Effect::unseen_bias returns an UnseenBias (its sentence and the base parameters it moves).
 // 15: Measurement gained the drive's current loop (its bandwidth and delay: its layout changed).
-#define MHBENCH_PLUGIN_INTERFACE_VERSION 15
+// 16: Effect gained model_changes_inputs (a virtual: whether its later stages change the sensors' outputs).
+#define MHBENCH_PLUGIN_INTERFACE_VERSION 16
 
 // Each plugin library exports one symbol whose name carries the version it was built against
 // (framework/plugin/interface_symbol.cpp, compiled into every target that links mhbench::plugin), so

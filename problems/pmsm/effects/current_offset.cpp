@@ -28,6 +28,7 @@ public:
     Complex plant_current_sensor_offset() const override { return alpha_beta_offset(values()[0], values()[1]); }
 
     unsigned model_stages() const override { return ModelStage::SensorCurrents | ModelStage::CurrentRipple; }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     // omega L J o: proportional to L_d and L_q.
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool is_size(std::size_t) const override { return true; }

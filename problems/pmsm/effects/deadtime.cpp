@@ -67,6 +67,7 @@ public:
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::InverterError); }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     bool model_linear_in(std::size_t k) const override { return k == 0; }  // the voltage, not the band
     // The loss follows each phase current's sign: a six-step wave in the stator frame, whose

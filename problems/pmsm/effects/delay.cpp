@@ -19,6 +19,7 @@ public:
     double plant_delay() const override { return values()[0]; }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Delay); }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     bool is_size(std::size_t) const override { return true; }
     std::vector<int> angle_orders() const override { return {}; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }

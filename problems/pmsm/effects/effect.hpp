@@ -160,6 +160,12 @@ public:
     // How model() at `stage` depends on the base parameters (see BaseDependence); stages before
     // Coefficients are never asked.
     virtual BaseDependence model_base_dependence(ModelStage /*stage*/) const { return BaseDependence::Affine; }
+    // Whether model() at `stage`, from Coefficients on, may change what the sensor stages left: the
+    // currents, the speed, the angle with its cos and sin, the temperatures. A fit's affine split runs
+    // the later stages once per base parameter from the same inputs, and copies them back before each
+    // run only when some effect says it may (tests/pmsm_steady_state_model_test.cpp checks every
+    // registered effect's answer). The default, true, is always correct.
+    virtual bool model_changes_inputs(ModelStage /*stage*/) const { return true; }
     // Whether the prediction is linear in real parameter k (the others fixed), with any other library
     // effects beside this one: what model() adds at its stage is linear in it, and no later stage of
     // any effect is nonlinear in what earlier stages made (later stages use currents and the angle

@@ -22,6 +22,7 @@ public:
     double plant_angle_offset() const override { return values()[0]; }
 
     unsigned model_stages() const override { return ModelStage::SensorAngle | ModelStage::ControllerFrame; }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     bool is_size(std::size_t) const override { return true; }
     std::vector<int> angle_orders() const override { return {}; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }

@@ -45,6 +45,7 @@ public:
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::MachineVoltage); }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool model_linear_in(std::size_t k) const override { return k == 0 || k == 2; }  // the amplitudes, not the phases
     std::vector<int> angle_orders() const override { return {6}; }  // the 5th and 7th both turn at 6 theta in the rotor frame

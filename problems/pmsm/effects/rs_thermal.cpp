@@ -14,6 +14,7 @@ public:
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::Coefficients); }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Linear; }
     bool model_linear_in(std::size_t) const override { return true; }
     std::vector<int> angle_orders() const override { return {}; }

@@ -40,6 +40,7 @@ public:
     }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::FluxLinkage); }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     // The coefficients; not the knee and the exponent.
     bool model_linear_in(std::size_t k) const override { return k != 1 && k != 3; }

@@ -12,6 +12,7 @@ public:
     Complex plant_command_shortfall() const override { return {values()[0], values()[1]}; }
 
     unsigned model_stages() const override { return static_cast<unsigned>(ModelStage::LoggedVoltage); }
+    bool model_changes_inputs(ModelStage) const override { return false; }
     BaseDependence model_base_dependence(ModelStage) const override { return BaseDependence::Additive; }
     bool model_linear_in(std::size_t) const override { return true; }
     std::vector<int> angle_orders() const override { return {}; }

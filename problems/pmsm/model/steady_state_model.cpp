@@ -152,8 +152,10 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
         }
         stages_ |= e->model_stages();
         for (unsigned bit = static_cast<unsigned>(ModelStage::Coefficients); bit <= static_cast<unsigned>(ModelStage::CurrentRipple); bit <<= 1)
-            if ((e->model_stages() & bit) != 0 && e->model_base_dependence(static_cast<ModelStage>(bit)) == BaseDependence::Affine)
-                affine_effects_ = true;
+            if ((e->model_stages() & bit) != 0) {
+                if (e->model_base_dependence(static_cast<ModelStage>(bit)) == BaseDependence::Affine) affine_effects_ = true;
+                if (e->model_changes_inputs(static_cast<ModelStage>(bit))) later_stages_change_inputs_ = true;
+            }
     }
     bounds_.lower = Eigen::Map<Eigen::VectorXd>(lower.data(), static_cast<Eigen::Index>(lower.size()));
     bounds_.upper = Eigen::Map<Eigen::VectorXd>(upper.data(), static_cast<Eigen::Index>(upper.size()));
@@ -183,7 +185,7 @@ ModelState SteadyStateModel::make_state(Eigen::Index rows) const {
 AffinePrediction SteadyStateModel::make_affine(Eigen::Index rows) const {
     AffinePrediction a;
     a.inputs = make_state(rows);
-    a.lane = make_state(rows);
+    if (later_stages_change_inputs_) a.lane = make_state(rows);
     for (auto* v : {&a.offset_d, &a.offset_q, &a.residual_d, &a.residual_q}) v->resize(rows);
     for (auto* v : {&a.phi_d, &a.phi_q}) v->resize(rows, 4);
     a.parameters.resize(parameter_count());
@@ -507,8 +509,10 @@ void SteadyStateModel::predict_affine(const double* p, AffinePrediction& out, Ei
     load(in, first);
     run_stage(ModelStage::SensorCurrents, p, in, false, first);
     run_stage(ModelStage::SensorAngle, p, in, false, first);
-    // Later stages may change the currents and the angle too, so each run starts from the inputs.
+    // Where a later stage may change the currents, the angle or the like, each run starts from a copy
+    // of the inputs; otherwise the runs share them (the runs overwrite only what from_base sets).
     auto restart = [&](ModelState& s) {
+        if (!later_stages_change_inputs_) return;
         s.i_d = in.i_d;
         s.i_q = in.i_q;
         s.omega = in.omega;
@@ -520,7 +524,7 @@ void SteadyStateModel::predict_affine(const double* p, AffinePrediction& out, Ei
     };
     Eigen::VectorXd& q = out.parameters;
     q = Eigen::Map<const Eigen::VectorXd>(p, parameter_count());
-    ModelState& s = out.lane;
+    ModelState& s = later_stages_change_inputs_ ? out.lane : in;
     q.head<4>().setZero();
     restart(s);
     from_base(q.data(), s, false, first);

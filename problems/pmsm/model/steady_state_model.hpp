@@ -33,8 +33,11 @@ void require_columns(const Effect& effect, const Measurement& data);
 // The prediction split over a block of rows: u = offset + phi * (Rs, Ld, Lq, psi_f), for the effect
 // parameters it was made with (SteadyStateModel::predict_affine).
 struct AffinePrediction {
-    ModelState inputs;  // the block after the stages before the base parameters (sensors)
-    ModelState lane;    // one run of the later stages
+    // The block after the stages before the base parameters (sensors): its currents, speed, angle and
+    // temperatures. The later stages run on `lane`, a copy, where an effect's later stages may change
+    // those (Effect::model_changes_inputs), and on `inputs` itself otherwise (`lane` then empty).
+    ModelState inputs;
+    ModelState lane;
     Eigen::ArrayXd offset_d, offset_q;  // V: the prediction with the base parameters at zero
     Eigen::ArrayXXd phi_d, phi_q;       // V per unit of each base parameter (rows x 4)
     Eigen::VectorXd parameters;         // scratch: all parameters with the base ones replaced
@@ -190,6 +193,7 @@ private:
     Bounds bounds_, plausible_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
+    bool later_stages_change_inputs_ = false;  // Effect::model_changes_inputs, for predict_affine's lanes
     // The stated current loop (alpha 0: none), its corners from the base model's least-squares fit
     // to all rows of the data.
     CurrentLoop loop_;
