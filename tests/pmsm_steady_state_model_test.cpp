@@ -198,6 +198,49 @@ TEST_CASE("each library effect leaves the later stages' inputs as it says, and t
     }
 }
 
+TEST_CASE("a block predicted again from the inputs it holds is the prediction made afresh, to the bit", "[pmsm][steady_state_model]") {
+    const Measurement& data = diagnosis_data({});
+    Rng rng(29);
+    auto same = [](const ModelState& a, const ModelState& b) {
+        return std::memcmp(a.u_d.data(), b.u_d.data(), static_cast<std::size_t>(a.size()) * sizeof(double)) == 0 &&
+               std::memcmp(a.u_q.data(), b.u_q.data(), static_cast<std::size_t>(a.size()) * sizeof(double)) == 0;
+    };
+    // Each parameter outside the sensor stages changed in turn, on a model with effects in every stage.
+    const auto model = make_model(parse_model_spec("base+current_offset+encoder_offset+rs_thermal+psi_thermal+saturation+flux_harmonic+"
+                                                   "deadtime+delay+voltage_offset"),
+                                  data);
+    const Eigen::Index b = model->blocks() - 1, first = model->block_first(b);
+    int changed = 0;
+    for (Eigen::Index j = 0; j < model->parameter_count(); ++j) {
+        if (model->in_sensor_stages(j)) continue;
+        INFO(model->parameter_names()[static_cast<std::size_t>(j)]);
+        Eigen::VectorXd values = random_values(*model, rng);
+        ModelState again = model->make_state(model->block_size(b)), afresh = model->make_state(model->block_size(b));
+        model->predict(values.data(), again, first);
+        values[j] = j < 4 ? 1.1 * values[j] : rng.uniform(model->bounds().lower[j], model->bounds().upper[j]);
+        model->predict_again(values.data(), again, first);
+        model->predict(values.data(), afresh, first);
+        CHECK(same(again, afresh));
+        ++changed;
+    }
+    CHECK(changed >= 15);
+    // An effect that changes an input after the sensors: said, the block is loaded again and the
+    // prediction is the fresh one; left unsaid, the change compounds and it is not.
+    for (const bool says_so : {true, false}) {
+        std::vector<std::unique_ptr<Effect>> effects;
+        effects.push_back(std::make_unique<ScaledCurrent>(says_so));
+        const SteadyStateModel scaled(data, std::move(effects));
+        Eigen::VectorXd values = scaled.parameters_of(MotorParameters{});
+        values[4] = 0.2;
+        ModelState again = scaled.make_state(scaled.block_size(0)), afresh = scaled.make_state(scaled.block_size(0));
+        scaled.predict(values.data(), again, 0);
+        scaled.predict_again(values.data(), again, 0);
+        scaled.predict(values.data(), afresh, 0);
+        INFO("says so: " << says_so);
+        CHECK(same(again, afresh) == says_so);
+    }
+}
+
 TEST_CASE("the search box holds the plausible range, stretched where it reaches beyond the declared one", "[pmsm][steady_state_model]") {
     const Measurement& servo = diagnosis_data({});
     const double largest = std::sqrt((servo.i_d.array().square() + servo.i_q.array().square()).maxCoeff());

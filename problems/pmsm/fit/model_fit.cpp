@@ -669,6 +669,16 @@ void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values
     auto& prediction_d = a.residual_d;
     auto& prediction_q = a.residual_q;
     bool have_prediction = false;
+    // s holds the block's inputs at `values`' sensor-stage parameters once a column outside those
+    // stages has been predicted: later columns outside them start from there.
+    bool loaded = false;
+    auto predict_at = [&](Eigen::Index j) {
+        if (loaded && !model.in_sensor_stages(j))
+            model.predict_again(at.data(), s, first);
+        else
+            model.predict(at.data(), s, first);
+        loaded = !model.in_sensor_stages(j);
+    };
     for (std::size_t c = 0; c < columns.size(); ++c) {
         const Eigen::Index j = columns[c], k = static_cast<Eigen::Index>(c);
         if (j < 4) {
@@ -685,18 +695,18 @@ void block_jacobian(const SteadyStateModel& model, const Eigen::VectorXd& values
             }
             const double to = up != values[j] ? up : down;
             at[j] = to;
-            model.predict(at.data(), s, first);
+            predict_at(j);
             d.col(k) = ((s.u_d - prediction_d) / (to - values[j])).matrix();
             q.col(k) = ((s.u_q - prediction_q) / (to - values[j])).matrix();
             at[j] = values[j];
             continue;
         }
         at[j] = up;
-        model.predict(at.data(), s, first);
+        predict_at(j);
         d.col(k) = s.u_d.matrix();
         q.col(k) = s.u_q.matrix();
         at[j] = down;
-        model.predict(at.data(), s, first);
+        predict_at(j);
         d.col(k) = (d.col(k) - s.u_d.matrix()) / (up - down);
         q.col(k) = (q.col(k) - s.u_q.matrix()) / (up - down);
         at[j] = values[j];

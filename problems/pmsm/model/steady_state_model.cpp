@@ -145,6 +145,7 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
             plausible_lower.push_back(lo);
             plausible_upper.push_back(hi);
             linear_.push_back(!sensor && e->model_linear_in(real++));
+            sensor_.push_back(sensor);
             names_.push_back(e->name() + "." + spec.name);
             // A plausible end beyond the declared range stretches the search to twice that width.
             lower.push_back(lo < spec.minimum ? spec.maximum - 2.0 * (spec.maximum - lo) : spec.minimum);
@@ -488,6 +489,14 @@ void SteadyStateModel::predict(const double* p, ModelState& s, Eigen::Index firs
     load(s, first);
     run_stage(ModelStage::SensorCurrents, p, s, false, first);
     run_stage(ModelStage::SensorAngle, p, s, false, first);
+    from_base(p, s, false, first);
+}
+
+void SteadyStateModel::predict_again(const double* p, ModelState& s, Eigen::Index first) const {
+    if (later_stages_change_inputs_) {
+        predict(p, s, first);
+        return;
+    }
     from_base(p, s, false, first);
 }
 

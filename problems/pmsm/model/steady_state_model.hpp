@@ -121,6 +121,9 @@ public:
     // Whether the prediction is linear in effect parameter j (Effect::model_linear_in); false for the
     // base parameters, in which it is affine through the affine split instead.
     bool linear_in(Eigen::Index j) const { return linear_[static_cast<std::size_t>(j)]; }
+    // Whether parameter j is an effect's that acts in the sensor stages (before the base parameters):
+    // predictions that differ in it start from different inputs.
+    bool in_sensor_stages(Eigen::Index j) const { return j >= 4 && sensor_[static_cast<std::size_t>(j - 4)]; }
     // Whether a block's state carries this temperature: only when an effect lists it (model_columns).
     bool reads_temp_winding() const { return reads_temp_winding_; }
     bool reads_temp_magnet() const { return reads_temp_magnet_; }
@@ -146,6 +149,11 @@ public:
     AffinePrediction make_affine(Eigen::Index rows) const;
     // Predicted logged voltages of rows [first, first + state.size()) into state.u_d, state.u_q.
     void predict(const double* parameters, ModelState& state, Eigen::Index first = 0) const;
+    // The same, on the block whose inputs `state` holds from a predict() (or this) at parameters that
+    // differ from these in none that is in_sensor_stages: where no later stage changes the inputs
+    // (Effect::model_changes_inputs) the block is not loaded again. A Jacobian predicts each block
+    // once per column.
+    void predict_again(const double* parameters, ModelState& state, Eigen::Index first) const;
     // The offset and base-parameter columns of rows [first, first + out.rows()) at the effect
     // parameters in `parameters` (its base entries are ignored): one run of the sensor stages, one
     // run of the later stages for the offset and one per base parameter in which additive effects
@@ -190,6 +198,7 @@ private:
     std::vector<Eigen::Index> offsets_;  // where each effect's parameters start
     std::vector<std::string> names_;
     std::vector<bool> linear_;  // per parameter, see linear_in
+    std::vector<bool> sensor_;  // per effect parameter, see in_sensor_stages
     Bounds bounds_, plausible_;
     unsigned stages_ = 0;
     bool affine_effects_ = false;
