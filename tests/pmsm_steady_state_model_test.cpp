@@ -71,6 +71,19 @@ private:
     bool says_so_;
 };
 
+std::unique_ptr<SteadyStateModel> scaled_current_model(const Measurement& data, bool says_so) {
+    std::vector<std::unique_ptr<Effect>> effects;
+    effects.push_back(std::make_unique<ScaledCurrent>(says_so));
+    return std::make_unique<SteadyStateModel>(data, std::move(effects));
+}
+
+// The current scaled by 1.2.
+Eigen::VectorXd scaled_current_values(const SteadyStateModel& model) {
+    Eigen::VectorXd values = model.parameters_of(MotorParameters{});
+    values[4] = 0.2;
+    return values;
+}
+
 // The largest difference between the split and predictions made one by one, relative to their size.
 double split_error(const SteadyStateModel& model, const Eigen::VectorXd& values) {
     Eigen::VectorXd offset;
@@ -188,13 +201,9 @@ TEST_CASE("each library effect leaves the later stages' inputs as it says, and t
     // An effect that changes an input after the sensors: said, the split copies the inputs back before
     // each of its runs and is exact; left unsaid, the runs compound the change and the split is wrong.
     for (const bool says_so : {true, false}) {
-        std::vector<std::unique_ptr<Effect>> effects;
-        effects.push_back(std::make_unique<ScaledCurrent>(says_so));
-        const SteadyStateModel model(data, std::move(effects));
-        Eigen::VectorXd values = model.parameters_of(MotorParameters{});
-        values[4] = 0.2;
+        const auto model = scaled_current_model(data, says_so);
         INFO("says so: " << says_so);
-        CHECK((split_error(model, values) <= 1e-12) == says_so);
+        CHECK((split_error(*model, scaled_current_values(*model)) <= 1e-12) == says_so);
     }
 }
 
@@ -227,15 +236,12 @@ TEST_CASE("a block predicted again from the inputs it holds is the prediction ma
     // An effect that changes an input after the sensors: said, the block is loaded again and the
     // prediction is the fresh one; left unsaid, the change compounds and it is not.
     for (const bool says_so : {true, false}) {
-        std::vector<std::unique_ptr<Effect>> effects;
-        effects.push_back(std::make_unique<ScaledCurrent>(says_so));
-        const SteadyStateModel scaled(data, std::move(effects));
-        Eigen::VectorXd values = scaled.parameters_of(MotorParameters{});
-        values[4] = 0.2;
-        ModelState again = scaled.make_state(scaled.block_size(0)), afresh = scaled.make_state(scaled.block_size(0));
-        scaled.predict(values.data(), again, 0);
-        scaled.predict_again(values.data(), again, 0);
-        scaled.predict(values.data(), afresh, 0);
+        const auto scaled = scaled_current_model(data, says_so);
+        const Eigen::VectorXd values = scaled_current_values(*scaled);
+        ModelState again = scaled->make_state(scaled->block_size(0)), afresh = scaled->make_state(scaled->block_size(0));
+        scaled->predict(values.data(), again, 0);
+        scaled->predict_again(values.data(), again, 0);
+        scaled->predict(values.data(), afresh, 0);
         INFO("says so: " << says_so);
         CHECK(same(again, afresh) == says_so);
     }
