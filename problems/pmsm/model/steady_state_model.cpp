@@ -154,8 +154,13 @@ SteadyStateModel::SteadyStateModel(std::optional<Measurement> owned, const Measu
         stages_ |= e->model_stages();
         for (unsigned bit = static_cast<unsigned>(ModelStage::Coefficients); bit <= static_cast<unsigned>(ModelStage::CurrentRipple); bit <<= 1)
             if ((e->model_stages() & bit) != 0) {
-                if (e->model_base_dependence(static_cast<ModelStage>(bit)) == BaseDependence::Affine) affine_effects_ = true;
+                const auto dependence = e->model_base_dependence(static_cast<ModelStage>(bit));
+                if (dependence == BaseDependence::Affine) affine_effects_ = true;
                 if (e->model_changes_inputs(static_cast<ModelStage>(bit))) later_stages_change_inputs_ = true;
+                if (bit == static_cast<unsigned>(ModelStage::Coefficients) || bit == static_cast<unsigned>(ModelStage::FluxLinkage)) {
+                    effects_before_voltage_[0] = true;
+                    if (dependence != BaseDependence::Additive) effects_before_voltage_[1] = true;
+                }
             }
     }
     bounds_.lower = Eigen::Map<Eigen::VectorXd>(lower.data(), static_cast<Eigen::Index>(lower.size()));
@@ -493,9 +498,10 @@ void base_voltage(const double* p, Eigen::Index n, const double* __restrict i_d,
 void SteadyStateModel::from_base(const double* p, ModelState& s, bool base_lane, Eigen::Index first) const {
     s.ld = p[1];
     s.lq = p[2];
-    if (!acts_in(stages_, ModelStage::Coefficients) && !acts_in(stages_, ModelStage::FluxLinkage)) {
-        // No effect between them: the coefficients, the fluxes and the voltage in one pass over the
-        // rows rather than six (the same operations, so the same numbers).
+    if (!effects_before_voltage_[base_lane ? 1 : 0]) {
+        // No effect runs between them (a base lane skips additive ones): the coefficients, the fluxes
+        // and the voltage in one pass over the rows rather than six (the same operations, so the same
+        // numbers).
         base_voltage(p, s.size(), s.i_d.data(), s.i_q.data(), s.omega.data(), s.rs.data(), s.psi_f.data(), s.psi_d.data(), s.psi_q.data(),
                      s.u_d.data(), s.u_q.data());
     } else {

@@ -203,6 +203,9 @@ private:
     unsigned stages_ = 0;
     bool affine_effects_ = false;
     bool later_stages_change_inputs_ = false;  // Effect::model_changes_inputs, for predict_affine's lanes
+    // Whether an effect runs in the Coefficients or FluxLinkage stage: [0] in a full run, [1] in a base
+    // lane (which skips additive effects). from_base takes one pass over the rows where none does.
+    bool effects_before_voltage_[2] = {false, false};
     // The stated current loop (alpha 0: none), its corners from the base model's least-squares fit
     // to all rows of the data.
     CurrentLoop loop_;
