@@ -15,6 +15,7 @@
 
 #include "framework/random.hpp"
 #include "problems/pmsm/fit/model_fit.hpp"
+#include "problems/pmsm/model/sample_and_hold.hpp"
 #include "problems/pmsm/model/steady_state_model.hpp"
 #include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/effects/row_memo.hpp"
@@ -198,6 +199,15 @@ TEST_CASE("each library effect leaves the later stages' inputs as it says, and t
         }
     }
     CHECK(asked >= 9);
+    // With the loop stated, dead time and flux harmonics run through it (run_through_loop rather than
+    // their model()): the lanes that share the inputs still split exactly.
+    Measurement looped = data;
+    state_current_loop(looped, DriveTiming{1e-4, 0.0, 0.0, 250.0});
+    const auto through = make_model(parse_model_spec("base+deadtime+flux_harmonic+saturation+voltage_offset"), looped);
+    const auto direct = make_model(parse_model_spec("base+deadtime+flux_harmonic+saturation+voltage_offset"), data);
+    const Eigen::VectorXd defaults = through->parameters_of(MotorParameters{});
+    CHECK((predict_stacked(*through, defaults) - predict_stacked(*direct, defaults)).cwiseAbs().maxCoeff() > 1e-6);  // the loop acts
+    for (int draw = 0; draw < 3; ++draw) check_split(*through, random_values(*through, rng));
     // An effect that changes an input after the sensors: said, the split copies the inputs back before
     // each of its runs and is exact; left unsaid, the runs compound the change and the split is wrong.
     for (const bool says_so : {true, false}) {
@@ -233,6 +243,20 @@ TEST_CASE("a block predicted again from the inputs it holds is the prediction ma
         ++changed;
     }
     CHECK(changed >= 15);
+    // And with the loop stated, whose runs start at the block's first row.
+    Measurement looped = data;
+    state_current_loop(looped, DriveTiming{1e-4, 0.0, 0.0, 250.0});
+    const auto through = make_model(parse_model_spec("base+deadtime+flux_harmonic+saturation"), looped);
+    for (Eigen::Index j = 4; j < through->parameter_count(); ++j) {
+        INFO("loop stated: " << through->parameter_names()[static_cast<std::size_t>(j)]);
+        Eigen::VectorXd values = random_values(*through, rng);
+        ModelState again = through->make_state(through->block_size(0)), afresh = through->make_state(through->block_size(0));
+        through->predict(values.data(), again, 0);
+        values[j] = rng.uniform(through->bounds().lower[j], through->bounds().upper[j]);
+        through->predict_again(values.data(), again, 0);
+        through->predict(values.data(), afresh, 0);
+        CHECK(same(again, afresh));
+    }
     // An effect that changes an input after the sensors: said, the block is loaded again and the
     // prediction is the fresh one; left unsaid, the change compounds and it is not.
     for (const bool says_so : {true, false}) {
