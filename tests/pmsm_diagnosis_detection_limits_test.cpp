@@ -3,7 +3,9 @@
 // steady-state equations (seed eq. 2), not from the model code.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/QR>
 
@@ -49,8 +51,13 @@ NoiseEstimate noise_of(double sigma_d, double sigma_q, double effective_samples)
 
 // The limit of a voltage offset on axis `axis` by hand: the u_d rows of the base model are
 // Rs i_d - omega Lq i_q, its u_q rows Rs i_q + omega Ld i_d + omega psi_f; the offset's column is 1
-// on its axis. Both in units of each axis' noise.
-double offset_limit_by_hand(const Measurement& data, Eigen::Index logged_rows, const NoiseEstimate& noise, int axis) {
+// on its axis. Both in units of each axis' noise. The evidence's and the relevant size's.
+struct ByHand {
+    double by_evidence, by_relevant_size;
+    double limit() const { return std::max(by_evidence, by_relevant_size); }
+};
+
+ByHand offset_limit_by_hand(const Measurement& data, Eigen::Index logged_rows, const NoiseEstimate& noise, int axis) {
     const Eigen::Index n = data.size();
     Eigen::MatrixXd base = Eigen::MatrixXd::Zero(2 * n, 4);
     base.col(0) << data.i_d, data.i_q;
@@ -70,7 +77,7 @@ double offset_limit_by_hand(const Measurement& data, Eigen::Index logged_rows, c
     for (int a = 0; a < 2; ++a) volts.segment(a * n, n) *= noise.long_run[a];
     const double power = volts.squaredNorm() / (2.0 * static_cast<double>(n));
     const double resolution = std::sqrt(noise.sigma.squaredNorm() / 2.0);
-    return std::max(std::sqrt(needed / (weight * unique.squaredNorm())), evidence::relevant_voltage * resolution / std::sqrt(power));
+    return {std::sqrt(needed / (weight * unique.squaredNorm())), evidence::relevant_voltage * resolution / std::sqrt(power)};
 }
 
 const DetectionLimit& limit_of(const std::vector<DetectionLimit>& limits, const std::string& parameter) {
@@ -89,13 +96,22 @@ TEST_CASE("a voltage offset's detection limit is its signature left by the base 
                                          40);
     const ModelFit fit = base_fit(data);
     const NoiseEstimate noise = noise_of(0.02, 0.05, 400.0);
+    // Which test sets each limit: on the short log the evidence, on one fifty times as long (the
+    // evidence grows with the rows, the relevant size does not) the relevant size.
+    std::vector<bool> set_by_relevant_size;
     for (const Eigen::Index logged : {data.size(), 50 * data.size()}) {
         const auto limits = detection_limits(data, logged, fit, {"voltage_offset"}, noise);
         REQUIRE(limits.size() == 2);
-        CHECK(limit_of(limits, "voltage_offset.u_d").limit == Approx(offset_limit_by_hand(data, logged, noise, 0)).epsilon(1e-6));
-        CHECK(limit_of(limits, "voltage_offset.u_q").limit == Approx(offset_limit_by_hand(data, logged, noise, 1)).epsilon(1e-6));
+        for (int axis = 0; axis < 2; ++axis) {
+            const ByHand hand = offset_limit_by_hand(data, logged, noise, axis);
+            const DetectionLimit& l = limit_of(limits, axis == 0 ? "voltage_offset.u_d" : "voltage_offset.u_q");
+            CHECK(l.limit == Approx(hand.limit()).epsilon(1e-6));
+            CHECK(l.set_by_relevant_size == (hand.by_relevant_size > hand.by_evidence));
+            set_by_relevant_size.push_back(l.set_by_relevant_size);
+        }
         CHECK(limit_of(limits, "voltage_offset.u_d").unit == "V");
     }
+    CHECK(set_by_relevant_size == std::vector<bool>{false, false, true, true});
     // Noise twice as large: every limit twice as large (evidence and relevance both scale with it).
     const auto once = detection_limits(data, data.size(), fit, {"voltage_offset", "deadtime"}, noise);
     const auto twice = detection_limits(data, data.size(), fit, {"voltage_offset", "deadtime"}, noise_of(0.04, 0.1, 400.0));

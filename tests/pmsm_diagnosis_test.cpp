@@ -112,6 +112,8 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
         CHECK(l["effect"] != "encoder_offset");
         CHECK(l["parameter"] != "deadtime.current_band");
         if (l["parameter"] == "deadtime.voltage") dead_time_voltage = l["limit"].get<double>() > 0.0;
+        // Which of the search's tests sets it, for every finite limit.
+        if (!l["limit"].is_null()) CHECK((l["set_by"] == "evidence" || l["set_by"] == "relevant size"));
     }
     CHECK(dead_time_voltage);
 

@@ -91,9 +91,14 @@ std::vector<DetectionLimit> detection_limits(const Measurement& design, Eigen::I
             limit.typical = values[static_cast<Eigen::Index>(j)];
             // A signature the model's own parameters take whole (as identifiability_of judges it) shows at no size.
             const bool absorbed = !(unique_fraction(others, column) >= evidence::absorbed_below);
-            limit.limit = !absorbed && information > 0.0 && power > 0.0
-                              ? std::max(std::sqrt(needed / information), evidence::relevant_voltage * resolution / std::sqrt(power))
-                              : std::numeric_limits<double>::infinity();
+            if (!absorbed && information > 0.0 && power > 0.0) {
+                const double by_evidence = std::sqrt(needed / information);
+                const double by_relevant_size = evidence::relevant_voltage * resolution / std::sqrt(power);
+                limit.limit = std::max(by_evidence, by_relevant_size);
+                limit.set_by_relevant_size = by_relevant_size > by_evidence;
+            } else {
+                limit.limit = std::numeric_limits<double>::infinity();
+            }
             out.push_back(std::move(limit));
         }
     }

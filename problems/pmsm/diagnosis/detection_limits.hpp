@@ -16,7 +16,8 @@ namespace mhb::pmsm {
 // an effect with that many parameters (evidence::supported_bic) and the modelled voltage by
 // evidence::relevant_voltage of the noise, after the model's own parameters have absorbed what they
 // can of it (the Fisher information of the size with the others profiled out): at the limit, about
-// half of such logs would show the effect. Effect shapes at their declared typical values.
+// half of such logs would show the effect where the evidence sets it (DetectionLimit::
+// set_by_relevant_size says which sets it). Effect shapes at their declared typical values.
 std::vector<DetectionLimit> detection_limits(const Measurement& design, Eigen::Index rows, const ModelFit& model,
                                              const std::vector<std::string>& library, const NoiseEstimate& noise);
 

@@ -79,6 +79,11 @@ struct DetectionLimit {
     std::string effect, parameter, unit;  // parameter as "<effect>.<name>"
     double limit = 0.0;                   // infinite: no size of it shows in this log
     double typical = 0.0;                 // the parameter's declared typical value
+    // Which of the search's tests asks more of a size: the evidence (its likelihood ratio scatters
+    // about its mean, so at the limit about half of such logs pass), or the voltage it must change
+    // (relevant_voltage; a change fitted more precisely than that, so the step from refused to found
+    // may be sharper). Rates measured at the limits: docs/diagnosis.md, section 5.
+    bool set_by_relevant_size = false;
 };
 
 enum class Identifiability { Identifiable, MostlyAbsorbed, NotIdentifiable };

@@ -1,6 +1,8 @@
 #include "problems/pmsm/report/diagnosis_report.hpp"
-#include "problems/pmsm/diagnosis/noise.hpp"
 
+#include <cmath>
+
+#include "problems/pmsm/diagnosis/noise.hpp"
 #include "problems/pmsm/report/fit_report.hpp"
 
 namespace mhb::pmsm {
@@ -105,7 +107,12 @@ json diagnosis_json(const Diagnosis& d) {
     out["findings"] = d.findings;
     json limits = json::array();
     for (const auto& l : d.detection_limits)
-        limits.push_back({{"effect", l.effect}, {"parameter", l.parameter}, {"limit", finite_or_null(l.limit)}, {"unit", l.unit}, {"typical", l.typical}});
+        limits.push_back({{"effect", l.effect},
+                          {"parameter", l.parameter},
+                          {"limit", finite_or_null(l.limit)},
+                          {"unit", l.unit},
+                          {"typical", l.typical},
+                          {"set_by", std::isfinite(l.limit) ? json(l.set_by_relevant_size ? "relevant size" : "evidence") : json(nullptr)}});
     out["detection_limits"] = limits;
     json candidates = json::array();
     for (const auto& c : d.candidates) {

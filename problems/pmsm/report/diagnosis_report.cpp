@@ -272,13 +272,15 @@ void add_doubts(Document& doc, const Diagnosis& d) {
     doc.add(Paragraph{"How these verdicts are reached: docs/effects.md, \"How diagnose decides\"."});
     if (!d.detection_limits.empty()) {
         doc.add(Heading{3, "Detection limits of this log"});
-        doc.add(Paragraph{fmt::format("The smallest size at which each effect that {} leaves out would be found, in about half of such logs "
-                                      "(docs/diagnosis.md, \"Detection limits\"): a smaller one may be present.",
+        doc.add(Paragraph{fmt::format("The smallest size at which each effect that {} leaves out would be found (docs/diagnosis.md, "
+                                      "\"Detection limits\", with the rates measured at the limits and at twice them): a smaller one may be "
+                                      "present. \"Set by\": the evidence the search asks of an effect, or the voltage it must change "
+                                      "(\"relevant size\"), whichever asks more.",
                                       d.recommended.text())});
-        Table limits("detection limits", {"parameter", "limit", "unit", "the effect's default"});
+        Table limits("detection limits", {"parameter", "limit", "unit", "set by", "the effect's default"});
         for (const auto& l : d.detection_limits)
             limits.add_row({l.parameter, std::isfinite(l.limit) ? fmt::format("{:.3g}", l.limit) : std::string("no size shows"), l.unit,
-                            fmt::format("{:.3g}", l.typical)});
+                            std::isfinite(l.limit) ? (l.set_by_relevant_size ? "relevant size" : "evidence") : "—", fmt::format("{:.3g}", l.typical)});
         doc.add(std::move(limits));
     }
 }

@@ -54,9 +54,11 @@ std::string diagnosis_text(const Diagnosis& d) {
     if (!d.lack_of_fit.mechanical_angle.empty()) t += "mechanical orders (k/p of the electrical frequency): " + d.lack_of_fit.mechanical_angle + "\n";
     t += noise_from_data_text(d.noise) + "\n";
     if (!d.detection_limits.empty()) {
-        t += "\ndetection limits of this log: the smallest size at which each effect left out would be found (in about half of such logs)\n";
+        t += "\ndetection limits of this log: the smallest size at which each effect left out would be found (in about half of such logs; "
+             "marked *: set by the voltage it must change rather than by the evidence, docs/diagnosis.md, section 5)\n";
         for (const auto& l : d.detection_limits) {
-            const std::string size = std::isfinite(l.limit) ? fmt::format("{:.3g} {}", l.limit, l.unit) : std::string("no size shows in this log");
+            const std::string size = std::isfinite(l.limit) ? fmt::format("{:.3g} {}{}", l.limit, l.unit, l.set_by_relevant_size ? " *" : "")
+                                                            : std::string("no size shows in this log");
             t += l.typical != 0.0 ? fmt::format("  {:<30} {:<36} (default {:.3g})\n", l.parameter, size, l.typical)
                                   : fmt::format("  {:<30} {}\n", l.parameter, size);
         }
