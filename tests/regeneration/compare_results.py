@@ -12,7 +12,7 @@ each job twice.
 
 The subset (about two minutes on 2 cores, 121 s measured 2026-11-26) reruns Table 3, the demo (every optimizer on classic and
 BBOB functions), one case of each detection study (of the 5 kW and 100 kW machines' studies and of
-the two raw-log studies the clean drives) and the tutorial's diagnoses; --all reruns every experiment and study (about 15 minutes on
+the two raw-log studies the clean drives; of the detection-limit studies a pair at twice the limits) and the tutorial's diagnoses; --all reruns every experiment and study (about 15 minutes on
 2 cores before the two machines' studies were added, and about 12 more for results/cec2022, 25 more
 for results/cec2017, 4 for results/cec2022_lshade_code_choices and 50 for results/cec2017_jso_lshade
 as they were measured, docs/test-functions.md and docs/algorithms.md).
@@ -67,7 +67,8 @@ def study_jobs(only=None):
     """Each committed study; with `only`, one case of each (a label, or design/label on a study with designs)."""
     jobs = []
     for name in ("detection_study", "detection_study_averaged", "baldor_study", "detection_study_5kw", "detection_study_100kw",
-                 "detection_study_raw", "detection_study_raw_5kw"):
+                 "detection_study_raw", "detection_study_raw_5kw", "detection_limit_study_servo", "detection_limit_study_5kw",
+                 "detection_limit_study_100kw"):
         command = ["study", f"experiments/pmsm/{name}.toml", "--out", "{out}", "--quiet"]
         rows = None
         if only:
@@ -220,7 +221,9 @@ def main():
         jobs = [j for j in experiment_jobs() if j.name in ("pmsm_table3", "demo")]
         jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal",
                             "baldor_study": "high_small_quiet/clean", "detection_study_5kw": "clean",
-                            "detection_study_100kw": "clean", "detection_study_raw": "raw/clean", "detection_study_raw_5kw": "raw/clean"})
+                            "detection_study_100kw": "clean", "detection_study_raw": "raw/clean", "detection_study_raw_5kw": "raw/clean",
+                            "detection_limit_study_servo": "encoder_offset+voltage_offset", "detection_limit_study_5kw": "deadtime+voltage_offset",
+                            "detection_limit_study_100kw": "encoder_offset+flux_harmonic"})
     jobs += tutorial_jobs(program, scratch)
 
     failed = 0
