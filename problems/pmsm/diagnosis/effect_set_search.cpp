@@ -281,8 +281,8 @@ std::vector<std::string> alternatives_to_best(const Measurement& data, const Mea
 // count, the noise measured on the round's best fit) among those the design can identify and that
 // predict held-out segments; plausibility is not asked of a single step, only of the set the search
 // ends with, because one missing effect biases the values that another takes alone. It stops when no
-// effect is supported, or on a tie of alternatives. Then each added effect that the others now explain (its removal
-// costs less than strong evidence) is pruned, the weakest first.
+// effect is supported, or on a tie of alternatives. Then each added effect that the others now
+// explain (its removal costs less than strong evidence) is pruned, the weakest first.
 SetSearch search_effect_sets(const Measurement& data, const Measurement& design, const ModelSpec& spec, const ModelFit& model,
                              const std::vector<std::string>& library, const std::vector<Candidate>& first_round,
                              const DiagnosisOptions& options) {

@@ -34,7 +34,7 @@ struct SearchStep {
 struct SetSearch {
     std::vector<SearchStep> steps;  // steps[0]: the model diagnosed
     std::vector<std::string> pruned;
-    std::vector<std::string> tie;   // when the search stopped on two or more effects it cannot order
+    std::vector<std::string> tie;   // when the search stopped on two or more alternatives it cannot order
     ModelSpec tie_spec;
     Eigen::VectorXd tie_values;
     std::vector<UnpredictiveAddition> unpredictive;  // of the round that added nothing
@@ -53,6 +53,7 @@ struct RoundChoice {
     // their defaults would give if they are there (interval_caveats.hpp); empty otherwise.
     Eigen::VectorXd whole_law_base;
     std::vector<std::string> tie;    // the best first, then each effect the evidence or the design cannot separate from it
+                                     // (search_effect_sets keeps those that are alternatives to it)
     // Supported additions with stronger evidence than the best (all of them, without a best) that
     // predict too few held-out segments.
     std::vector<UnpredictiveAddition> unpredictive;
