@@ -264,14 +264,37 @@ namespace {
 // effects of about equal evidence with different signatures. Measured: two effects each at twice its
 // printed detection limit ended on such a "tie" in 27 of the servo's 200 drives, 9 of the 5 kW
 // machine's and 4 of the 100 kW machine's (results/detection_limit_study_*).
-std::vector<std::string> alternatives_to_best(const Measurement& data, const Measurement& design, const RoundChoice& choice,
-                                              const WindowNoise& data_noise, const DiagnosisOptions& options, const FitOptions& compared) {
+struct Alternatives {
+    std::vector<std::string> tie;  // the best first
+    std::vector<Addition> beside;  // each tied effect fitted beside the best: the next round's fits of them
+};
+
+Alternatives alternatives_to_best(const Measurement& data, const Measurement& design, const RoundChoice& choice,
+                                  const WindowNoise& data_noise, const DiagnosisOptions& options, const FitOptions& compared) {
     const Addition& best = *choice.best;
     const std::vector<std::string> others(choice.tie.begin() + 1, choice.tie.end());
-    const auto beside = fit_additions(data, best.fit.spec, best.fit, others, compared);
-    std::vector<std::string> out{best.effect};
-    for (const auto& addition : beside)
-        if (!choose_addition(data, design, best.fit, {addition}, data_noise, options).best) out.push_back(addition.effect);
+    Alternatives out{{best.effect}, fit_additions(data, best.fit.spec, best.fit, others, compared)};
+    for (const auto& addition : out.beside)
+        if (!choose_addition(data, design, best.fit, {addition}, data_noise, options).best) out.tie.push_back(addition.effect);
+    return out;
+}
+
+// fit_additions of `effects` beside `fit`, taking those already in `fitted` (made by the same call).
+std::vector<Addition> additions_reusing(const Measurement& data, const ModelFit& fit, const std::vector<std::string>& effects,
+                                        std::vector<Addition> fitted, const FitOptions& options) {
+    const auto found = [&](const std::string& e) {
+        return std::find_if(fitted.begin(), fitted.end(), [&](const Addition& a) { return a.effect == e; });
+    };
+    std::vector<std::string> missing;
+    for (const auto& e : effects)
+        if (found(e) == fitted.end()) missing.push_back(e);
+    auto made = fit_additions(data, fit.spec, fit, missing, options);
+    std::vector<Addition> out;
+    auto next = made.begin();
+    for (const auto& e : effects) {
+        const auto it = found(e);
+        out.push_back(it != fitted.end() ? std::move(*it) : std::move(*next++));
+    }
     return out;
 }
 
@@ -305,20 +328,23 @@ SetSearch search_effect_sets(const Measurement& data, const Measurement& design,
             s.unpredictive = choice.unpredictive;
             break;
         }
+        std::vector<Addition> beside;
         if (choice.tie.size() > 1) {
-            if (auto tie = alternatives_to_best(data, design, choice, s.data_noise, options, compared); tie.size() > 1) {
-                s.tie = std::move(tie);
+            auto alternatives = alternatives_to_best(data, design, choice, s.data_noise, options, compared);
+            if (alternatives.tie.size() > 1) {
+                s.tie = std::move(alternatives.tie);
                 s.tie_spec = current.spec;
                 s.tie_values = current.values;
                 break;
             }
+            beside = std::move(alternatives.beside);
         }
         const Addition& best = *choice.best;
         s.steps.push_back({best.fit, StepKind::Added, best.effect, best.added_parameters, choice.reduced_law, choice.whole_law_base});
         std::vector<std::string> rest;
         for (const auto& e : library)
             if (!best.fit.spec.contains(e)) rest.push_back(e);
-        round = fit_additions(data, best.fit.spec, best.fit, rest, compared);
+        round = additions_reusing(data, best.fit, rest, std::move(beside), compared);
     }
     // Backward pruning, only of what the search added and only once two effects are there.
     while (s.steps.back().fit.spec.effects.size() >= spec.effects.size() + 2) {
