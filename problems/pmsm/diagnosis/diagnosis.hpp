@@ -14,6 +14,7 @@
 //    columns lie in the span of the model's own there is absorbed without trace; hypothetical extra
 //    operating points show which experiment would reveal it.
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -84,6 +85,8 @@ struct DetectionLimit {
     // (relevant_voltage; a change fitted more precisely than that, so the step from refused to found
     // may be sharper). Rates measured at the limits: docs/diagnosis.md, section 5.
     bool set_by_relevant_size = false;
+    // Its name in the outputs: "evidence" or "relevant size"; null where no size shows.
+    const char* set_by() const { return !std::isfinite(limit) ? nullptr : set_by_relevant_size ? "relevant size" : "evidence"; }
 };
 
 enum class Identifiability { Identifiable, MostlyAbsorbed, NotIdentifiable };

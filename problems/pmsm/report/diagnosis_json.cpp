@@ -1,7 +1,5 @@
 #include "problems/pmsm/report/diagnosis_report.hpp"
 
-#include <cmath>
-
 #include "problems/pmsm/diagnosis/noise.hpp"
 #include "problems/pmsm/report/fit_report.hpp"
 
@@ -112,7 +110,7 @@ json diagnosis_json(const Diagnosis& d) {
                           {"limit", finite_or_null(l.limit)},
                           {"unit", l.unit},
                           {"typical", l.typical},
-                          {"set_by", std::isfinite(l.limit) ? json(l.set_by_relevant_size ? "relevant size" : "evidence") : json(nullptr)}});
+                          {"set_by", l.set_by() ? json(l.set_by()) : json(nullptr)}});
     out["detection_limits"] = limits;
     json candidates = json::array();
     for (const auto& c : d.candidates) {

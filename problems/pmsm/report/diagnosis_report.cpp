@@ -280,7 +280,7 @@ void add_doubts(Document& doc, const Diagnosis& d) {
         Table limits("detection limits", {"parameter", "limit", "unit", "set by", "the effect's default"});
         for (const auto& l : d.detection_limits)
             limits.add_row({l.parameter, std::isfinite(l.limit) ? fmt::format("{:.3g}", l.limit) : std::string("no size shows"), l.unit,
-                            std::isfinite(l.limit) ? (l.set_by_relevant_size ? "relevant size" : "evidence") : "—", fmt::format("{:.3g}", l.typical)});
+                            l.set_by() ? l.set_by() : "—", fmt::format("{:.3g}", l.typical)});
         doc.add(std::move(limits));
     }
 }
