@@ -15,6 +15,7 @@
 #include "framework/input_error.hpp"
 #ifdef MHBENCH_WITH_MPI
 #include "framework/mpi/distributed_run.hpp"
+#include "framework/optional_library.hpp"
 #endif
 #include "framework/plots.hpp"
 #include "framework/report_tables.hpp"
@@ -113,7 +114,8 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
 #ifdef MHBENCH_WITH_MPI
             DistributedOutcome outcome;
             try {
-                outcome = run_distributed(spec, options);
+                const auto run = optional_library_entry<DistributedRun()>("mpi", "mhbench_mpi_run", SymbolScope::global)();
+                outcome = run(spec, options);
             } catch (const RunStoppedOnAnotherRank&) {
                 return exit_bad_input;
             }

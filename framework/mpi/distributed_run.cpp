@@ -101,3 +101,8 @@ DistributedOutcome run_distributed(const ExperimentSpec& spec, RunOptions option
 }
 
 }  // namespace mhb
+
+// This file is the library libmhbench_mpi.so (CMakeLists.txt); `mhbench run` finds the run here.
+extern "C" [[gnu::visibility("default")]] mhb::DistributedRun mhbench_mpi_run() {
+    return &mhb::run_distributed;
+}

@@ -1,6 +1,7 @@
 #pragma once
 // `mpirun -np N mhbench run FILE`: the trials spread over N processes, each running its share on its
-// own TBB threads. Built only when Open MPI and Boost.MPI are installed (MHBENCH_WITH_MPI).
+// own TBB threads. Built only when Open MPI and Boost.MPI are installed (MHBENCH_WITH_MPI), as a
+// library of its own.
 //
 // Rank 0 prepares the output as a single run would (resume checks, earlier runs kept aside,
 // experiment.json with `ranks` and `threads`). Rank r runs share r+1 of N of the trials (the
@@ -31,5 +32,9 @@ struct DistributedOutcome {
 // Call from every rank. Rank 0 rethrows what stopped the run (InputError: bad input, a failed
 // write); the other ranks then return without a summary.
 DistributedOutcome run_distributed(const ExperimentSpec& spec, RunOptions options);
+
+// run_distributed is in libmhbench_mpi.so, which `mhbench run` loads only when mpirun started it
+// (framework/optional_library.hpp): every other command starts without Open MPI.
+using DistributedRun = DistributedOutcome (*)(const ExperimentSpec& spec, RunOptions options);
 
 }  // namespace mhb

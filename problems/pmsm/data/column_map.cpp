@@ -232,20 +232,4 @@ UnitConversion unit_conversion(const ColumnMap& map, const std::string& column) 
     throw InputError(map.origin.at(column), 0, column, fmt::format("unknown unit '{}'", unit));
 }
 
-std::string printable_field(std::string_view field) {
-    constexpr std::size_t longest = 40;
-    std::string out;
-    for (std::size_t k = 0; k < field.size() && k < longest; ++k) {
-        const auto c = static_cast<unsigned char>(field[k]);
-        if (c < 0x20 || c >= 0x7f) out += fmt::format("\\x{:02X}", c);
-        else out += static_cast<char>(c);
-    }
-    if (field.size() > longest) out += "...";
-    return out;
-}
-
-std::string column_label(const std::string& name_in_file, const std::string& column) {
-    return name_in_file == column || column.empty() ? name_in_file : fmt::format("{} ({})", name_in_file, column);
-}
-
 }  // namespace mhb::pmsm

@@ -75,7 +75,8 @@ private:
 UnitConversion unit_conversion(const ColumnMap& map, const std::string& column);
 
 // A name or field as it may appear in a message: bytes a terminal would act on are shown as \xNN, and
-// a long text is cut, so that binary input never reaches the terminal raw.
+// a long text is cut, so that binary input never reaches the terminal raw. (Defined, with
+// column_label, in measurement_file_columns.cpp, which the HDF5 reader's library compiles too.)
 std::string printable_field(std::string_view field);
 
 // "Id_meas (i_d)" when the file's name differs from mhbench's, else the name: the field messages name.

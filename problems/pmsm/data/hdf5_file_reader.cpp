@@ -1,4 +1,5 @@
-// HDF5 files, and MAT v7.3 files (HDF5 with MATLAB's conventions), through the HDF5 C library.
+// HDF5 files, and MAT v7.3 files (HDF5 with MATLAB's conventions), through the HDF5 C library. Built
+// as a library of its own, loaded by the first command that reads such a file (hdf5_reader()).
 // The file's links are listed in one pass; only the datasets that feed a column are opened, and
 // each is checked (layout, storage, class, shape, rows, string sizes) before its data is read.
 #include <algorithm>
@@ -555,12 +556,16 @@ FileColumns Hdf5File::read(const ColumnChoice& choose) {
     return out;
 }
 
-}  // namespace
-
-FileColumns read_hdf5_columns(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout) {
+FileColumns read_file(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout) {
     // The library prints its error stack on stderr by default; refusals carry its reason instead.
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     return Hdf5File(path, layout).read(choose);
 }
 
+}  // namespace
 }  // namespace mhb::pmsm
+
+// This file is the library libmhbench_hdf5.so (CMakeLists.txt); the program finds its reader here.
+extern "C" [[gnu::visibility("default")]] mhb::pmsm::Hdf5Reader mhbench_hdf5_reader() {
+    return &mhb::pmsm::read_file;
+}

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "framework/input_error.hpp"
+#include "framework/optional_library.hpp"
 #include "problems/pmsm/data/column_map.hpp"
 #include "problems/pmsm/data/measurement_file_columns.hpp"
 #include "problems/pmsm/data/text_file.hpp"
@@ -61,83 +62,6 @@ double converted(const UnitConversion& conversion, double value, const std::stri
         throw InputError(source, line, field,
                          fmt::format("{}{} {} is beyond the range of a double after conversion", row, value, conversion.unit()));
     return out;
-}
-
-std::string variable_field(const std::string& name, const std::string& column) {
-    return printable_field(column_label(name, column));
-}
-
-void DeclaredRows::check(const std::string& field, std::uint64_t rows) {
-    if (rows == 0) throw InputError(source_, 0, field, "empty: no rows");
-    if (rows > static_cast<std::uint64_t>(max_measurement_rows))
-        throw InputError(source_, 0, field, fmt::format("{} rows; the limit is {} rows", rows, max_measurement_rows));
-    if (first_.empty()) {
-        first_ = field;
-        rows_ = rows;
-    } else if (rows != rows_) {
-        throw InputError(source_, 0, field,
-                         fmt::format("{} rows, but {} has {}; every column must have one value per row", rows, first_, rows_));
-    }
-}
-
-namespace {
-
-void append_utf8(std::uint32_t code, std::string& out) {
-    if (code < 0x80) {
-        out += static_cast<char>(code);
-    } else if (code < 0x800) {
-        out += static_cast<char>(0xC0 | (code >> 6));
-        out += static_cast<char>(0x80 | (code & 0x3F));
-    } else if (code < 0x10000) {
-        out += static_cast<char>(0xE0 | (code >> 12));
-        out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-        out += static_cast<char>(0x80 | (code & 0x3F));
-    } else {
-        out += static_cast<char>(0xF0 | (code >> 18));
-        out += static_cast<char>(0x80 | ((code >> 12) & 0x3F));
-        out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-        out += static_cast<char>(0x80 | (code & 0x3F));
-    }
-}
-
-// The labels of a char matrix's rows, `append_row(r, text)` appending row r's characters, without
-// the blanks MATLAB pads the shorter rows with.
-template <class AppendRow>
-TextColumn labels_by_row(std::size_t rows, AppendRow append_row) {
-    TextColumn out;
-    out.rows.resize(static_cast<Eigen::Index>(rows));
-    std::string text;
-    for (std::size_t r = 0; r < rows; ++r) {
-        text.clear();
-        append_row(r, text);
-        while (!text.empty() && text.back() == ' ') text.pop_back();
-        out.rows[static_cast<Eigen::Index>(r)] = out.index_of(text);
-    }
-    return out;
-}
-
-}  // namespace
-
-TextColumn char_matrix_labels(const std::uint16_t* units, std::size_t rows, std::size_t width) {
-    return labels_by_row(rows, [&](std::size_t r, std::string& text) {
-        for (std::size_t c = 0; c < width; ++c) {
-            std::uint32_t code = units[r + rows * c];
-            if (code >= 0xD800 && code < 0xDC00 && c + 1 < width) {
-                const std::uint32_t low = units[r + rows * (c + 1)];
-                if (low >= 0xDC00 && low < 0xE000) {
-                    code = 0x10000 + ((code - 0xD800) << 10) + (low - 0xDC00);
-                    ++c;
-                }
-            }
-            append_utf8(code, text);
-        }
-    });
-}
-
-TextColumn char_matrix_labels(const std::uint8_t* bytes, std::size_t rows, std::size_t width) {
-    return labels_by_row(rows, [&](std::size_t r, std::string& text) {
-        for (std::size_t c = 0; c < width; ++c) text += static_cast<char>(bytes[r + rows * c]);
-    });
 }
 
 namespace {
@@ -239,6 +163,11 @@ MeasurementFormat measurement_format(const std::filesystem::path& path) {
     return format_of(in, ec ? 0 : size);
 }
 
+Hdf5Reader hdf5_reader() {
+    static const Hdf5Reader reader = optional_library_entry<Hdf5Reader()>("hdf5", "mhbench_hdf5_reader")();
+    return reader;
+}
+
 Measurement read_binary_measurement(const std::filesystem::path& path, MeasurementFormat format, const ColumnMap& map,
                                     Isolation isolation) {
     const std::string source = path.string();
@@ -250,10 +179,11 @@ Measurement read_binary_measurement(const std::filesystem::path& path, Measureme
     // binary files are read one at a time, which costs little next to a fit.
     static std::mutex binary_reader;
     std::unique_lock lock(binary_reader);
+    const Hdf5Reader read_hdf5 = format == MeasurementFormat::Mat5 ? nullptr : hdf5_reader();
     auto columns = format == MeasurementFormat::Mat5 ? read_mat5_columns(path, choose)
                    : isolation == Isolation::in_process
-                       ? read_hdf5_columns(path, choose, layout)
-                       : read_in_child_process(source, "the HDF5 library", [&] { return read_hdf5_columns(path, choose, layout); });
+                       ? read_hdf5(path, choose, layout)
+                       : read_in_child_process(source, "the HDF5 library", [&] { return read_hdf5(path, choose, layout); });
     lock.unlock();
     return measurement_from_file_columns(std::move(columns), map, source);
 }

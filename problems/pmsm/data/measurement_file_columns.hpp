@@ -89,9 +89,13 @@ FileColumns read_mat5_columns(const std::filesystem::path& path, const ColumnCho
 // is HDF5 with MATLAB's classes in attributes (char as UTF-16, cell arrays as references).
 enum class Hdf5Layout { plain, matlab };
 
-// An HDF5 or MAT v7.3 file through the HDF5 C library. The columns are the datasets at the root;
-// when the root holds no dataset and exactly one group, that group's datasets.
-FileColumns read_hdf5_columns(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout);
+// The reader of an HDF5 or MAT v7.3 file, through the HDF5 C library. The columns are the datasets
+// at the root; when the root holds no dataset and exactly one group, that group's datasets. It is
+// in libmhbench_hdf5.so (hdf5_file_reader.cpp), loaded by the first call (framework/optional_library.hpp),
+// so that libhdf5 and the ~30 libraries it brings are loaded only by a command that reads such a
+// file. Take it before a fork (read_in_child_process): the child then does not run the dynamic loader.
+using Hdf5Reader = FileColumns (*)(const std::filesystem::path& path, const ColumnChoice& choose, Hdf5Layout layout);
+Hdf5Reader hdf5_reader();
 
 // `read` run in a child process, with at most 3 GB more address space than this process and
 // `seconds` of wall time; its columns, or its refusal, come back through a pipe. A child ended by a
