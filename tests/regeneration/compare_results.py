@@ -179,10 +179,23 @@ def first_difference(a, b):
     return "content differs"
 
 
+def committed_files(directory):
+    """The files of `directory` that the repository holds. A run in the checkout (the quick start's
+    main job) leaves others beside them that .gitignore keeps out (results.jsonl, report.html), with
+    its own order of finished trials; those are not the committed results. Outside a git checkout,
+    every file."""
+    try:
+        listed = subprocess.run(["git", "-C", str(SOURCE), "ls-files", "-z", "--", str(directory.relative_to(SOURCE))],
+                                capture_output=True, check=True).stdout.decode()
+    except (OSError, subprocess.CalledProcessError):
+        return sorted(p.name for p in directory.iterdir() if p.is_file())
+    inside = directory.relative_to(SOURCE)
+    return sorted(Path(p).name for p in listed.split("\0") if p and Path(p).parent == inside)
+
+
 def compare(job, produced):
     differences = []
-    pairs = job.files.items() if job.files else [
-        (p.name, p.name) for p in sorted(job.committed.iterdir()) if p.is_file()]
+    pairs = job.files.items() if job.files else [(name, name) for name in committed_files(job.committed)]
     for committed_name, produced_name in pairs:
         committed = job.committed / committed_name
         now = produced / produced_name
