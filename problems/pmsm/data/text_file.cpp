@@ -12,7 +12,8 @@ namespace mhb::pmsm {
 
 FileBlocks::FileBlocks(const std::filesystem::path& path, const std::string& what, std::size_t block_bytes,
                        std::uintmax_t max_bytes)
-    : path_(path), what_(what), max_bytes_(max_bytes), buffer_(std::max<std::size_t>(block_bytes, 1)) {
+    : path_(path), what_(what), max_bytes_(max_bytes), buffer_size_(std::max<std::size_t>(block_bytes, 1)) {
+    buffer_ = std::make_unique_for_overwrite<char[]>(buffer_size_);
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw InputError(path.string(), 0, "", "is a directory; expected the " + what + " file");
@@ -21,7 +22,7 @@ FileBlocks::FileBlocks(const std::filesystem::path& path, const std::string& wha
 }
 
 std::string_view FileBlocks::next() {
-    in_.read(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+    in_.read(buffer_.get(), static_cast<std::streamsize>(buffer_size_));
     const auto got = static_cast<std::size_t>(in_.gcount());
     if (got == 0) {
         if (in_.bad()) throw InputError(path_.string(), 0, "", "reading the " + what_ + " failed: " + std::strerror(errno));
@@ -30,7 +31,7 @@ std::string_view FileBlocks::next() {
     read_ += got;
     if (read_ > max_bytes_)
         throw InputError(path_.string(), 0, "", fmt::format("the {} is larger than the limit of {} bytes", what_, max_bytes_));
-    return {buffer_.data(), got};
+    return {buffer_.get(), got};
 }
 
 void FileBlocks::rewind() {

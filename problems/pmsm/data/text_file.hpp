@@ -2,9 +2,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <string_view>
-#include <vector>
 
 namespace mhb::pmsm {
 
@@ -30,7 +30,10 @@ private:
     std::uintmax_t max_bytes_;
     std::uintmax_t read_ = 0;
     std::ifstream in_;
-    std::vector<char> buffer_;
+    // Not zeroed: a block of 4 MiB cleared for a file of 100 kB would cost more than reading it (the
+    // kernel faults in every page the clearing touches); only the pages a read fills are touched.
+    std::unique_ptr<char[]> buffer_;
+    std::size_t buffer_size_;
 };
 
 // mhb::InputError naming the path unless it is a regular file (after symbolic links), before anything
