@@ -199,7 +199,7 @@ TEST_CASE("two effects of about equal evidence and different signatures are both
     // limit (experiments/pmsm/detection_limit_study_5kw.toml): their dBIC from base lie within the tie
     // margin, but each is still supported beside the other. Before the search asked that, seed 8
     // ended as "base (tie)", and so did seed 12 of the current offset with the dead time.
-    for (const auto& [pair, seed] : {std::pair{"deadtime+voltage_offset", 8}, std::pair{"current_offset+deadtime", 12}}) {
+    for (const auto& [pair, seed] : {std::pair{"deadtime+voltage_offset", 8UL}, std::pair{"current_offset+deadtime", 12UL}}) {
         auto spec = read_study(std::filesystem::path(MHBENCH_SOURCE_DIR) / "experiments" / "pmsm" / "detection_limit_study_5kw.toml");
         spec.only = pair;
         spec.seeds = {seed};
