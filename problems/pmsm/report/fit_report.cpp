@@ -82,7 +82,8 @@ std::string fit_text(const ModelFit& fit, const Measurement& data) {
     }
     if (std::find(fit.segment_spread.begin(), fit.segment_spread.end(), true) != fit.segment_spread.end())
         t += "(*) interval widened to the spread over segments: the segments pull this parameter, or one it trades against, apart by more "
-             "than the noise would, so the model misses structure between them\n";
+             "than the residual's noise would: the model misses structure between them, or noise in the logged current moves each "
+             "segment its own way (`diagnose` tells which; docs/diagnosis.md, sections 4 and 7)\n";
     for (const auto& bias : fit.unseen_biases()) t += "note: " + bias.text + "\n";
     t += fmt::format("\nresidual rms: u_d {:.4g} V, u_q {:.4g} V, combined {:.4g} V\n", fit.rms.d, fit.rms.q, fit.rms.total);
     if (fit.segments.size() > 1) {
