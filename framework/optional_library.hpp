@@ -12,20 +12,16 @@ namespace mhb {
 // directory of the core library (libmhbench.so) that this process runs.
 std::string optional_library_path(const std::string& name);
 
-// Whose symbol lookups see what the library brings. Local keeps libhdf5 out of the plugins' way;
-// Open MPI needs global: it loads components of its own that look up libmpi's symbols globally.
-enum class SymbolScope { local, global };
-
 // The address of `symbol` in the optional library `name`, loaded on the first call (thread-safe;
 // never unloaded). Throws std::runtime_error naming the file and the dynamic loader's reason when
 // the library or the symbol cannot be found: an incomplete installation, not bad input.
-void* optional_library_symbol(const std::string& name, const char* symbol, SymbolScope scope = SymbolScope::local);
+void* optional_library_symbol(const std::string& name, const char* symbol);
 
 // The entry point `symbol` of the optional library `name`: a function of no arguments with C linkage
 // that returns what the library offers (a function pointer, a table of them).
 template <class Entry>
-Entry* optional_library_entry(const std::string& name, const char* symbol, SymbolScope scope = SymbolScope::local) {
-    return reinterpret_cast<Entry*>(optional_library_symbol(name, symbol, scope));
+Entry* optional_library_entry(const std::string& name, const char* symbol) {
+    return reinterpret_cast<Entry*>(optional_library_symbol(name, symbol));
 }
 
 }  // namespace mhb

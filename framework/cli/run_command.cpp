@@ -114,7 +114,7 @@ const bool run_registered = register_command("run", [](CLI::App& app) {
 #ifdef MHBENCH_WITH_MPI
             DistributedOutcome outcome;
             try {
-                const auto run = optional_library_entry<DistributedRun()>("mpi", "mhbench_mpi_run", SymbolScope::global)();
+                const auto run = optional_library_entry<DistributedRun()>("mpi", "mhbench_mpi_run")();
                 outcome = run(spec, options);
             } catch (const RunStoppedOnAnotherRank&) {
                 return exit_bad_input;
