@@ -2,10 +2,14 @@
 // the data cannot carry, and `mhbench diagnose` with its JSON contract and its report.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <fstream>
+#include <numbers>
 #include <regex>
 
 #include <nlohmann/json.hpp>
 
+#include "problems/pmsm/data/measurement.hpp"
 #include "problems/pmsm/report/diagnosis_report.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/temporary_directory.hpp"
@@ -219,4 +223,42 @@ TEST_CASE("a coefficient at its range end that copper's value fits as well is he
     CHECK(d.recommended.contains("rs_thermal"));
     CHECK(std::any_of(d.findings.begin(), d.findings.end(),
                       [](const std::string& f) { return f.rfind("Held at its material value: rs_thermal.alpha = 0.00393", 0) == 0; }));
+}
+
+TEST_CASE("the residual's mean against the angle is not drawn across angles the log never reached", "[pmsm][diagnosis][plots]") {
+    // A log without the rows whose electrical angle lies between 90 and 150 degrees.
+    auto spec = read_simulation_profile(profile_path("diagnosis_profile.toml"));
+    const auto all = simulate(spec).data;
+    std::vector<Eigen::Index> kept;
+    for (Eigen::Index k = 0; k < all.size(); ++k) {
+        const double deg = std::remainder((*all.theta_e)[k], 2.0 * std::numbers::pi) * 180.0 / std::numbers::pi;
+        if (deg < 90.0 || deg > 150.0) kept.push_back(k);
+    }
+    REQUIRE(static_cast<Eigen::Index>(kept.size()) < all.size());
+    const auto data = select_rows(all, kept);
+    const auto d = diagnose(data, parse_model_spec("base"), DiagnosisOptions{});
+    mhb::testing::TemporaryDirectory dir;
+    write_diagnosis_report(dir.path() / "report", data, d, "gap.csv");
+    // The bins' file: a line of data for each 5-degree bin that holds rows, a blank line after each
+    // run of them; two data lines in a row are neighbouring bins.
+    std::ifstream bins(dir.path() / "report" / "plot-data" / "residual_angle_bins.dat");
+    REQUIRE(bins);
+    std::string line;
+    double previous = NAN;
+    int runs = 0, rows = 0;
+    while (std::getline(bins, line)) {
+        if (line.starts_with("#")) continue;
+        if (line.empty()) {
+            previous = NAN;
+            continue;
+        }
+        const double centre = std::stod(line);
+        ++rows;
+        if (std::isnan(previous)) ++runs;
+        else CHECK(centre - previous == Approx(5.0));
+        CHECK_FALSE((centre > 90.0 && centre < 150.0));
+        previous = centre;
+    }
+    CHECK(runs == 2);        // below 90 degrees from -180, and above 150
+    CHECK(rows == 72 - 12);  // the 12 bins between 90 and 150 degrees are empty
 }

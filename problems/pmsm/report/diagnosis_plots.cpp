@@ -190,7 +190,12 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     std::ofstream mean(bins);
     mean << "# bin_centre_deg mean_r_d mean_r_q before_mean_r_d before_mean_r_q\n";
     for (int b = 0; b < count; ++b) {
-        if (hits[b] == 0) continue;
+        // A blank line where no sample fell: gnuplot breaks the line there instead of drawing one
+        // across angles the log never reached.
+        if (hits[b] == 0) {
+            if (b > 0 && hits[b - 1] > 0) mean << "\n";
+            continue;
+        }
         mean << fmt::format("{:.6g}", -180.0 + (b + 0.5) * 360.0 / count);
         for (int c = 0; c < 4; ++c) mean << fmt::format(" {:.6g}", sum(b, c) / hits[b]);
         mean << "\n";
