@@ -133,6 +133,11 @@ Verdict accept_or_refuse(const InputFormat& format, const std::string& text) {
     }
 }
 
+int load_hdf5_reader() {
+    pmsm::hdf5_reader();
+    return 0;
+}
+
 int fuzz_one_input(std::string_view name, const std::uint8_t* data, std::size_t size) {
     static const InputFormat& format = input_format(name);
     accept_or_refuse(format, std::string(reinterpret_cast<const char*>(data), size));

@@ -31,4 +31,9 @@ Verdict accept_or_refuse(const InputFormat& format, const std::string& text);
 // The body of LLVMFuzzerTestOneInput for the format `name`.
 int fuzz_one_input(std::string_view name, const std::uint8_t* data, std::size_t size);
 
+// The body of LLVMFuzzerInitialize for the formats libhdf5 reads (HDF5, MAT v7.3): loads the
+// reader's library (libmhbench_hdf5.so) before the first input, so that libFuzzer lists it among
+// the modules it takes coverage from when it starts. Returns 0.
+int load_hdf5_reader();
+
 }  // namespace mhb::fuzz
