@@ -193,7 +193,9 @@ TEST_CASE("each library effect leaves the later stages' inputs as it says, and t
                                      std::pair{&s.sin_theta, &before.sin_theta}, std::pair{&s.temp_winding, &before.temp_winding},
                                      std::pair{&s.temp_magnet, &before.temp_magnet}}) {
                 REQUIRE(now->size() == then->size());
-                CHECK(std::memcmp(now->data(), then->data(), static_cast<std::size_t>(now->size()) * sizeof(double)) == 0);
+                // Bit for bit (NaN included); an empty column (no temperature logged) has no data to compare.
+                if (now->size() > 0)
+                    CHECK(std::memcmp(now->data(), then->data(), static_cast<std::size_t>(now->size()) * sizeof(double)) == 0);
             }
             ++asked;
         }
