@@ -2,17 +2,24 @@
 // currents rotated by -delta and its voltage reference lands rotated by +delta. In steady state
 // Delta u_d ~ omega psi_f delta: a d-axis residual proportional to speed, independent of current.
 #include "problems/pmsm/effects/effect.hpp"
+#include "problems/pmsm/model/row_kernel.hpp"
 
 namespace mhb::pmsm {
 namespace {
 
+// (d, q) turned by e^{j angle}, in real arithmetic: the same products and sums as the complex
+// product, without its branch for NaN results, which stops the loop from vectorising.
+MHB_ROW_KERNEL void turn_rows(double c, double s, Eigen::Index n, double* __restrict d, double* __restrict q) {
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double x = d[k], y = q[k];
+        d[k] = c * x - s * y;
+        q[k] = c * y + s * x;
+    }
+}
+
 void rotate(Eigen::ArrayXd& d, Eigen::ArrayXd& q, double angle) {
     const Complex turn = std::polar(1.0, angle);
-    for (Eigen::Index k = 0; k < d.size(); ++k) {
-        const Complex v = turn * Complex{d[k], q[k]};
-        d[k] = v.real();
-        q[k] = v.imag();
-    }
+    turn_rows(turn.real(), turn.imag(), d.size(), d.data(), q.data());
 }
 
 class EncoderOffset final : public Effect {

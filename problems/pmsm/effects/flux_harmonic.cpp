@@ -4,6 +4,7 @@
 //   psi_r = psi_f [h5 e^{-j(6 theta + phi5)} + h7 e^{j(6 theta + phi7)}],
 //   back-EMF  d psi_r/dt + j omega psi_r = j omega psi_f [-5 h5 e^{-j(6 theta + phi5)} + 7 h7 e^{j(6 theta + phi7)}].
 #include "problems/pmsm/effects/effect.hpp"
+#include "problems/pmsm/model/row_kernel.hpp"
 
 namespace mhb::pmsm {
 namespace {
@@ -35,6 +36,22 @@ private:
     double a_ = 0.0, b_ = 0.0, c_ = 0.0, d_ = 0.0;
 };
 
+// The back-EMF over n rows, e^{j 6 theta} from the logged angle's cosine and sine by three squarings
+// and a product.
+MHB_ROW_KERNEL void add_emf(const EmfPhasors& emf, Eigen::Index n, const double* __restrict cos_theta, const double* __restrict sin_theta,
+                            const double* __restrict omega, const double* __restrict psi_f, double* __restrict u_d,
+                            double* __restrict u_q) {
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double c1 = cos_theta[k], s1 = sin_theta[k];
+        const double c2 = c1 * c1 - s1 * s1, s2 = 2.0 * c1 * s1;
+        const double c4 = c2 * c2 - s2 * s2, s4 = 2.0 * c2 * s2;
+        const double c6 = c4 * c2 - s4 * s2, s6 = s4 * c2 + c4 * s2;
+        const Complex e = emf.at(c6, s6, omega[k] * psi_f[k]);
+        u_d[k] += e.real();
+        u_q[k] += e.imag();
+    }
+}
+
 class FluxHarmonic final : public Effect {
 public:
     explicit FluxHarmonic(const ParameterSet& p) : Effect("flux_harmonic", p) {}
@@ -51,17 +68,7 @@ public:
     std::vector<int> angle_orders() const override { return {6}; }  // the 5th and 7th both turn at 6 theta in the rotor frame
     std::vector<std::string> model_columns() const override { return {"theta_e"}; }
     void model(ModelStage, const double* p, ModelState& s) const override {
-        const EmfPhasors emf(p);
-        for (Eigen::Index k = 0; k < s.u_d.size(); ++k) {
-            // e^{j 6 theta} from the logged angle's cosine and sine by three squarings and a product.
-            const double c1 = s.cos_theta[k], s1 = s.sin_theta[k];
-            const double c2 = c1 * c1 - s1 * s1, s2 = 2.0 * c1 * s1;
-            const double c4 = c2 * c2 - s2 * s2, s4 = 2.0 * c2 * s2;
-            const double c6 = c4 * c2 - s4 * s2, s6 = s4 * c2 + c4 * s2;
-            const Complex e = emf.at(c6, s6, s.omega[k] * s.psi_f[k]);
-            s.u_d[k] += e.real();
-            s.u_q[k] += e.imag();
-        }
+        add_emf(EmfPhasors(p), s.size(), s.cos_theta.data(), s.sin_theta.data(), s.omega.data(), s.psi_f.data(), s.u_d.data(), s.u_q.data());
     }
 };
 

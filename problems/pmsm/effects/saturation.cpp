@@ -16,6 +16,7 @@
 #include "problems/pmsm/effects/effect.hpp"
 #include "problems/pmsm/effects/row_memo.hpp"
 #include "problems/pmsm/machine/flux_models.hpp"
+#include "problems/pmsm/model/row_kernel.hpp"
 
 namespace mhb::pmsm {
 namespace {
@@ -24,6 +25,17 @@ namespace {
 // up to nine times at one exponent and knee (the point, each linear coefficient, the other's two
 // differences), and pow was most of the effect's cost (a fifth of a long log's diagnosis).
 thread_local RowMemo<double> powers, knee_losses;
+
+// The law's change of the fluxes over n rows, given each row's pow and knee loss.
+MHB_ROW_KERNEL void add_flux_change(const CoenergySaturation& l, Eigen::Index n, const double* __restrict i_d, const double* __restrict i_q,
+                                    const double* __restrict yv, const double* __restrict loss, double* __restrict psi_d,
+                                    double* __restrict psi_q) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const Complex change = l.flux_change(i_d[j], i_q[j], yv[j], loss[j]);
+        psi_d[j] += change.real();
+        psi_q[j] += change.imag();
+    }
+}
 
 class Saturation final : public Effect {
 public:
@@ -51,13 +63,7 @@ public:
                                      [&](double base) { return std::pow(base, l.v); });
         const double* loss = knee_losses.of(l.knee, n, [&](Eigen::Index j) { return s.i_q[j] / l.base_current; },
                                             [&](double y) { return CoenergySaturation::knee_loss(y, l.knee); });
-        const double *i_d = s.i_d.data(), *i_q = s.i_q.data();
-        double *psi_d = s.psi_d.data(), *psi_q = s.psi_q.data();
-        for (Eigen::Index j = 0; j < n; ++j) {
-            const Complex change = l.flux_change(i_d[j], i_q[j], yv[j], loss[j]);
-            psi_d[j] += change.real();
-            psi_q[j] += change.imag();
-        }
+        add_flux_change(l, n, s.i_d.data(), s.i_q.data(), yv, loss, s.psi_d.data(), s.psi_q.data());
     }
 
     // q self-saturation with its knee, cross-saturation with its exponent, the d axis's asymmetry,

@@ -15,6 +15,7 @@
 
 #include "framework/input_error.hpp"
 #include "problems/pmsm/machine/machine.hpp"
+#include "problems/pmsm/model/row_kernel.hpp"
 #include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
@@ -478,9 +479,10 @@ namespace {
 
 // from_base's stages without effects between them, over n rows (distinct arrays, said so that the loop
 // vectorises).
-void base_voltage(const double* p, Eigen::Index n, const double* __restrict i_d, const double* __restrict i_q, const double* __restrict omega,
-                  double* __restrict rs_out, double* __restrict psi_f_out, double* __restrict psi_d_out, double* __restrict psi_q_out,
-                  double* __restrict u_d, double* __restrict u_q) {
+MHB_ROW_KERNEL void base_voltage(const double* p, Eigen::Index n, const double* __restrict i_d, const double* __restrict i_q,
+                                 const double* __restrict omega, double* __restrict rs_out, double* __restrict psi_f_out,
+                                 double* __restrict psi_d_out, double* __restrict psi_q_out, double* __restrict u_d,
+                                 double* __restrict u_q) {
     const double rs = p[0], ld = p[1], lq = p[2], psi_f = p[3];
     for (Eigen::Index k = 0; k < n; ++k) {
         rs_out[k] = rs;
@@ -490,6 +492,23 @@ void base_voltage(const double* p, Eigen::Index n, const double* __restrict i_d,
         psi_q_out[k] = psi_q;
         u_d[k] = rs * i_d[k] - omega[k] * psi_q;
         u_q[k] = rs * i_q[k] + omega[k] * psi_d;
+    }
+}
+
+// The same stages one at a time, where effects run between them.
+MHB_ROW_KERNEL void linear_fluxes(double ld, double lq, Eigen::Index n, const double* __restrict i_d, const double* __restrict i_q,
+                                  const double* __restrict psi_f, double* __restrict psi_d, double* __restrict psi_q) {
+    for (Eigen::Index k = 0; k < n; ++k) {
+        psi_d[k] = ld * i_d[k] + psi_f[k];
+        psi_q[k] = lq * i_q[k];
+    }
+}
+MHB_ROW_KERNEL void machine_voltage(Eigen::Index n, const double* __restrict rs, const double* __restrict i_d, const double* __restrict i_q,
+                                    const double* __restrict omega, const double* __restrict psi_d, const double* __restrict psi_q,
+                                    double* __restrict u_d, double* __restrict u_q) {
+    for (Eigen::Index k = 0; k < n; ++k) {
+        u_d[k] = rs[k] * i_d[k] - omega[k] * psi_q[k];
+        u_q[k] = rs[k] * i_q[k] + omega[k] * psi_d[k];
     }
 }
 
@@ -508,11 +527,10 @@ void SteadyStateModel::from_base(const double* p, ModelState& s, bool base_lane,
         s.rs.setConstant(p[0]);
         s.psi_f.setConstant(p[3]);
         run_stage(ModelStage::Coefficients, p, s, base_lane, first);
-        s.psi_d = p[1] * s.i_d + s.psi_f;
-        s.psi_q = p[2] * s.i_q;
+        linear_fluxes(p[1], p[2], s.size(), s.i_d.data(), s.i_q.data(), s.psi_f.data(), s.psi_d.data(), s.psi_q.data());
         run_stage(ModelStage::FluxLinkage, p, s, base_lane, first);
-        s.u_d = s.rs * s.i_d - s.omega * s.psi_q;
-        s.u_q = s.rs * s.i_q + s.omega * s.psi_d;
+        machine_voltage(s.size(), s.rs.data(), s.i_d.data(), s.i_q.data(), s.omega.data(), s.psi_d.data(), s.psi_q.data(), s.u_d.data(),
+                        s.u_q.data());
     }
     for (auto stage : {ModelStage::MachineVoltage, ModelStage::CurrentRipple, ModelStage::InverterError, ModelStage::ControllerFrame,
                        ModelStage::Delay, ModelStage::LoggedVoltage})
