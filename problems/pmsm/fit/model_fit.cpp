@@ -1,6 +1,7 @@
 #include "problems/pmsm/fit/model_fit.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -18,6 +19,7 @@
 #include "framework/random.hpp"
 #include "framework/registry.hpp"
 #include "framework/trial.hpp"
+#include "problems/pmsm/fit/packet_order_sums.hpp"
 #include "problems/pmsm/model/sample_and_hold.hpp"
 
 namespace mhb::pmsm {
@@ -96,13 +98,29 @@ public:
                     a.residual_d -= reference[j] * a.phi_d.col(j);
                     a.residual_q -= reference[j] * a.phi_q.col(j);
                 }
+                // The 10 entries of the Gram matrix, the 4 moments and the total, on each axis.
+                std::array<ColumnPair, 15> d, q;
+                std::size_t k = 0;
                 for (int i = 0; i < 4; ++i) {
-                    for (int j = i; j < 4; ++j)
-                        sums.gram(i, j) = sums.gram(j, i) =
-                            (a.phi_d.col(i) * a.phi_d.col(j)).sum() + (a.phi_q.col(i) * a.phi_q.col(j)).sum();
-                    sums.moment[i] = (a.phi_d.col(i) * a.residual_d).sum() + (a.phi_q.col(i) * a.residual_q).sum();
+                    for (int j = i; j < 4; ++j, ++k) {
+                        d[k] = {a.phi_d.col(i).data(), a.phi_d.col(j).data()};
+                        q[k] = {a.phi_q.col(i).data(), a.phi_q.col(j).data()};
+                    }
+                    d[k] = {a.phi_d.col(i).data(), a.residual_d.data()};
+                    q[k++] = {a.phi_q.col(i).data(), a.residual_q.data()};
                 }
-                sums.total = a.residual_d.square().sum() + a.residual_q.square().sum();
+                d[k] = {a.residual_d.data(), a.residual_d.data()};
+                q[k] = {a.residual_q.data(), a.residual_q.data()};
+                std::array<double, 15> on_d, on_q;
+                packet_order_dots(d.data(), d.size(), rows, on_d.data());
+                packet_order_dots(q.data(), q.size(), rows, on_q.data());
+                k = 0;
+                for (int i = 0; i < 4; ++i) {
+                    for (int j = i; j < 4; ++j, ++k) sums.gram(i, j) = sums.gram(j, i) = on_d[k] + on_q[k];
+                    sums.moment[i] = on_d[k] + on_q[k];
+                    ++k;
+                }
+                sums.total = on_d[k] + on_q[k];
             }
         });
         BlockSums all{Eigen::Matrix4d::Zero(), Eigen::Vector4d::Zero(), 0.0};
@@ -770,6 +788,8 @@ std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyState
         // symmetric rank update per range gives J'J, J'r and r'r together.
         Eigen::MatrixXd augmented;
         Eigen::MatrixXd product(p + 1, p + 1);
+        std::vector<ColumnPair> pairs_d, pairs_q;
+        std::vector<double> dots_d, dots_q;
         for (Eigen::Index b = blocks.begin(); b != blocks.end(); ++b) {
             const Eigen::Index first = model.block_first(b), rows = model.block_size(b);
             augmented.resize(2 * rows, p + 1);
@@ -796,11 +816,21 @@ std::vector<RangeNormalEquations> partitioned_normal_equations(const SteadyState
                     const Eigen::Index count = end - k;
                     // The lower triangle as dot products of contiguous columns: for the few columns here
                     // a general rank update spends more time packing than multiplying.
+                    pairs_d.clear();
+                    pairs_q.clear();
                     for (Eigen::Index j = 0; j <= p; ++j)
                         for (Eigen::Index i = j; i <= p; ++i) {
-                            const auto ci = augmented.col(i), cj = augmented.col(j);
-                            product(i, j) = ci.segment(k, count).dot(cj.segment(k, count)) + ci.segment(rows + k, count).dot(cj.segment(rows + k, count));
+                            const double *ci = augmented.col(i).data(), *cj = augmented.col(j).data();
+                            pairs_d.push_back({ci + k, cj + k});
+                            pairs_q.push_back({ci + rows + k, cj + rows + k});
                         }
+                    dots_d.resize(pairs_d.size());
+                    dots_q.resize(pairs_q.size());
+                    packet_order_dots(pairs_d.data(), pairs_d.size(), count, dots_d.data());
+                    packet_order_dots(pairs_q.data(), pairs_q.size(), count, dots_q.data());
+                    std::size_t entry = 0;
+                    for (Eigen::Index j = 0; j <= p; ++j)
+                        for (Eigen::Index i = j; i <= p; ++i, ++entry) product(i, j) = dots_d[entry] + dots_q[entry];
                     Share share;
                     share.partition = partition;
                     share.range = range;
