@@ -91,7 +91,9 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
     // terms) and 8 of 10 at 2 mA, all 8 with fewer terms (with every segment voting: 10 (4) and 7 (7);
     // with whole laws only, 0 at 2 mA); the clean drives 20 of 20 at base. Of the Ld, Lq and psi_f
     // intervals of the drives found with fewer terms, 0 missed the plant's value at 1 mA and 5 at
-    // 2 mA, each with its caveat.
+    // 2 mA, each with its caveat. Since a law is not offered with fewer terms while a harmonic no
+    // library law makes is left (2026-11-27): 10 of 10 at 1 mA (5 with fewer terms), 8 of 10 at 2 mA
+    // (8).
     const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_diagnosis_profile.toml";
     const auto law = make_effect("saturation");
     const auto saturation_terms = law->law_terms();
@@ -161,8 +163,8 @@ TEST_CASE("a law of several terms that the operating points cannot pin whole is 
     }
 }
 
-TEST_CASE("while a harmonic no library law makes is left, every held-out segment votes, so a law does not take the missing effect's "
-          "segment means",
+TEST_CASE("while a harmonic no library law makes is left, every held-out segment votes and no law is offered with fewer terms, so a "
+          "law does not take the missing effect's segment means",
           "[pmsm][diagnosis][search][hidden]") {
     // The 100 kW machine's 2 % gain error of the phase a current sensor, which the library lacks
     // (its signature is a second harmonic of the electrical angle). Its segment means follow the
@@ -170,8 +172,10 @@ TEST_CASE("while a harmonic no library law makes is left, every held-out segment
     // error it changes; the coin tosses of the others had kept it out. Seeds the study does not use
     // (experiments/pmsm/detection_study_100kw.toml: 1-20). Measured (2026-11-26): "not in the library"
     // with nothing added in 6 of 10, saturation added (with fewer terms) in 4; with only the segments
-    // that decide voting whatever the residual holds, 3 and 7 (the study's 20 seeds: 14 and 6 now, 5
-    // and 15 that way). The second harmonic is named in 10 of 10 either way.
+    // that decide voting whatever the residual holds, 3 and 7 (the study's 20 seeds: 14 and 6, 5
+    // and 15 that way). The 4 took the law with fewer terms, the best of 14 shapes; with none offered
+    // while the harmonic is left (2026-11-27): 10 of 10 and 0 (the study's seeds: 20 and 0). The
+    // second harmonic is named in 10 of 10 either way.
     const std::string profile = std::string(MHBENCH_SOURCE_DIR) + "/experiments/pmsm/device_100kw_profile.toml";
     constexpr int seeds = 10;
     int not_in_library = 0, saturation = 0;
@@ -189,8 +193,8 @@ TEST_CASE("while a harmonic no library law makes is left, every held-out segment
         CHECK(std::any_of(d.outside_harmonics.begin(), d.outside_harmonics.end(), [](const Harmonic& h) { return h.order == 2; }));
     }
     INFO("not in the library, nothing added: " << not_in_library << " of " << seeds << "; saturation added: " << saturation);
-    CHECK(not_in_library >= 5);
-    CHECK(saturation <= 5);
+    CHECK(not_in_library >= 9);
+    CHECK(saturation <= 1);
 }
 
 TEST_CASE("two effects of about equal evidence and different signatures are both added, not called a tie (examples: two drives)",

@@ -217,6 +217,9 @@ struct UnpredictiveAddition {
     double explained = 0.0;     // share of the excess residual of the set it would extend
     int added_parameters = 0;
     HeldOutVote held_out;       // against that set
+    // A law of several terms whose fewer terms were not tried: a harmonic no library law makes was
+    // left (choose_addition says why).
+    bool fewer_terms_withheld = false;
 };
 
 struct Harmonic {

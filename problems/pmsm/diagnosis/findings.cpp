@@ -359,9 +359,12 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
     for (const auto& u : d.unpredictive)
         f.push_back(fmt::format("{} would explain {:.0f} % of what {} leaves (dBIC {:.1f} in the search over sets), but fitted without one operating "
                                 "point it predicts that point better than {} in only {} of {}{}: the {} operating points do not pin its {} "
-                                "parameters, so it is not added. More operating points (other currents and speeds) would decide.",
+                                "parameters, so it is not added. More operating points (other currents and speeds) would decide.{}",
                                 u.effect, 100.0 * u.explained, after, u.delta_bic, after,
-                                u.held_out.better, u.held_out.segments, deciding_count(u.held_out), u.held_out.segments, u.added_parameters));
+                                u.held_out.better, u.held_out.segments, deciding_count(u.held_out), u.held_out.segments, u.added_parameters,
+                                u.fewer_terms_withheld ? " Its law with fewer terms is not tried while a harmonic that no library law makes is "
+                                                         "left: the best of its subsets could take that effect's segment means."
+                                                       : ""));
     mechanical_findings(d, floor_tolerance, f);
     if (!d.model_intervals_valid())
         f.push_back(fmt::format("Model incomplete: the 95 % intervals of {} are not valid (they take what it misses for noise){}.",

@@ -100,7 +100,8 @@ json diagnosis_json(const Diagnosis& d) {
     for (const auto& u : d.unpredictive)
         unpredictive.push_back({{"effect", u.effect}, {"dbic", u.delta_bic}, {"explained", u.explained}, {"added_parameters", u.added_parameters},
                                 {"held_out_better", u.held_out.better}, {"held_out_segments", u.held_out.segments},
-                                {"held_out_better_deciding", u.held_out.better_deciding}, {"held_out_deciding", u.held_out.deciding}});
+                                {"held_out_better_deciding", u.held_out.better_deciding}, {"held_out_deciding", u.held_out.deciding},
+                                {"fewer_terms_withheld", u.fewer_terms_withheld}});
     out["unpredictive_additions"] = unpredictive;
     out["findings"] = d.findings;
     json limits = json::array();
