@@ -1,4 +1,5 @@
 #include "problems/pmsm/effects/effect.hpp"
+#include "problems/pmsm/model/row_kernel.hpp"
 
 namespace mhb::pmsm {
 
@@ -13,12 +14,7 @@ void ModelState::resize(Eigen::Index n) {
 void ModelState::rotate_angle(double delta) {
     if (theta.size() == 0) return;
     theta += delta;
-    const double c = std::cos(delta), s = std::sin(delta);
-    for (Eigen::Index k = 0; k < theta.size(); ++k) {
-        const double ck = cos_theta[k], sk = sin_theta[k];
-        cos_theta[k] = ck * c - sk * s;
-        sin_theta[k] = sk * c + ck * s;
-    }
+    turn_rows(std::cos(delta), std::sin(delta), theta.size(), cos_theta.data(), sin_theta.data());
 }
 
 Effect::Effect(std::string name, const ParameterSet& settings) : name_(std::move(name)), settings_(settings) {

@@ -7,16 +7,6 @@
 namespace mhb::pmsm {
 namespace {
 
-// (d, q) turned by e^{j angle}, in real arithmetic: the same products and sums as the complex
-// product, without its branch for NaN results, which stops the loop from vectorising.
-MHB_ROW_KERNEL void turn_rows(double c, double s, Eigen::Index n, double* __restrict d, double* __restrict q) {
-    for (Eigen::Index k = 0; k < n; ++k) {
-        const double x = d[k], y = q[k];
-        d[k] = c * x - s * y;
-        q[k] = c * y + s * x;
-    }
-}
-
 void rotate(Eigen::ArrayXd& d, Eigen::ArrayXd& q, double angle) {
     const Complex turn = std::polar(1.0, angle);
     turn_rows(turn.real(), turn.imag(), d.size(), d.data(), q.data());

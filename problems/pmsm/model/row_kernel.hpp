@@ -12,3 +12,15 @@
 #else
 #define MHB_ROW_KERNEL
 #endif
+
+#include <Eigen/Core>
+
+namespace mhb::pmsm {
+
+// The pairs (x, y) of n rows turned by the angle whose cosine and sine are c and s, in place:
+// (x c - y s, y c + x s), as the complex product gives them but without its branch for NaN results,
+// which stops a loop from vectorising. (Not in effect.hpp: a helper of the built-in effects, not
+// part of the plugin interface.)
+void turn_rows(double c, double s, Eigen::Index n, double* x, double* y);
+
+}  // namespace mhb::pmsm
