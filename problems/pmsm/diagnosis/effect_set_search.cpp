@@ -113,11 +113,15 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     double share = relevant_share;
     if (!current.spec.effects.empty() && at_noise_floor(left_by_current(), options.floor_tolerance, law_allowance(data, current, noise)))
         share = most_of_the_excess;
+    // Whether the set leaves a harmonic that no library law makes, asked only where it matters.
+    std::optional<bool> outside;
+    const auto outside_left = [&] {
+        if (!outside) outside = !harmonics_outside_library(left_by_current(), current.spec, noise).empty();
+        return *outside;
+    };
     // The held-out vote (docs/diagnosis.md, section 1; HeldOutVote::passes), asking for the
     // harmonics outside the library only where the two counts differ.
-    const auto predicts = [&](const HeldOutComparison& h) {
-        return h.vote.passes([&] { return !harmonics_outside_library(left_by_current(), current.spec, noise).empty(); });
-    };
+    const auto predicts = [&](const HeldOutComparison& h) { return h.vote.passes(outside_left); };
     // Whether an addition removes a relevant share of the excess and changes the voltage by a relevant amount.
     const auto relevant = [&](const Addition& a) {
         const double change = current.rss() - a.fit.rss();
@@ -157,8 +161,7 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     // drives and 4 of 10 unseen ones, now none; the servo's saturating iron keeps 19 of 20 and 10 of
     // 10 (docs/diagnosis.md, section 1).
     const auto fewer_terms_withheld = [&](const Addition& a) {
-        return options.reduced_laws && make_effect(a.effect)->law_terms().size() > 1 &&
-               !harmonics_outside_library(left_by_current(), current.spec, noise).empty();
+        return options.reduced_laws && make_effect(a.effect)->law_terms().size() > 1 && outside_left();
     };
     const auto offer_reduced = [&](const Addition& a, const std::string& why) {
         if (!options.reduced_laws || fewer_terms_withheld(a)) return;
