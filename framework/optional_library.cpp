@@ -29,8 +29,8 @@ void* optional_library_symbol(const std::string& name, const char* symbol) {
     static std::map<std::string, void*> handles;
     std::lock_guard lock(mutex);
     void*& handle = handles[name];
-    const std::string file = optional_library_path(name);
     if (!handle) {
+        const std::string file = optional_library_path(name);
         // RTLD_LOCAL: what it brings stays out of the plugins' symbol lookups. (Debian's Open MPI 4.1
         // loads its components beside a libmpi loaded so: tests/mpi_run_test.cpp runs under mpirun.)
         handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -46,8 +46,8 @@ void* optional_library_symbol(const std::string& name, const char* symbol) {
     void* address = dlsym(handle, symbol);
     if (!address) {
         const char* reason = dlerror();
-        throw std::runtime_error(fmt::format("{}: has no entry point {}: {} (a library of another mhbench version?)", file,
-                                             symbol, reason ? reason : "unknown reason"));
+        throw std::runtime_error(fmt::format("{}: has no entry point {}: {} (a library of another mhbench version?)",
+                                             optional_library_path(name), symbol, reason ? reason : "unknown reason"));
     }
     return address;
 }
