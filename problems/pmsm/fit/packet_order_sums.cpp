@@ -73,3 +73,5 @@ MHB_ROW_KERNEL void packet_order_dots(const ColumnPair* pairs, std::size_t count
 }
 
 }  // namespace mhb::pmsm
+
+#undef MHB_LOAD_QUAD
