@@ -37,9 +37,16 @@ void write_angle_harmonics(double theta, double* out) {
 }
 
 struct HarmonicEquations {
-    Eigen::MatrixXd gram;    // segments + 2 orders columns: one indicator per segment, cos and sin of each order
+    // Columns: one indicator per segment, then one linear trend per segment, then cos and sin of each order.
+    Eigen::MatrixXd gram;
     Eigen::MatrixXd moment;  // the same rows, one column per axis
 };
+
+// Segment k's trend at row t: -1 at its first row, +1 at its last, 0 at its centre (so it is
+// orthogonal to the segment's mean); 0 for a segment of one row.
+double segment_trend(const RowRange& r, Eigen::Index t) {
+    return r.rows > 1 ? (2.0 * static_cast<double>(t - r.first) - static_cast<double>(r.rows - 1)) / static_cast<double>(r.rows - 1) : 0.0;
+}
 
 // The regressors are never stored: each block of rows adds its share of X'X and X'r, the harmonics
 // by turning e^{j theta}.
@@ -50,6 +57,7 @@ HarmonicEquations harmonic_normal_equations(const Measurement& data, const std::
     struct Share {
         Eigen::Matrix<double, 2 * orders, 2 * orders> harmonic_gram;
         Eigen::MatrixXd segment_harmonic;  // s x 2 orders
+        Eigen::MatrixXd trend_harmonic;    // s x 2 orders
         Eigen::Matrix<double, 2 * orders, 2> harmonic_residual;
     };
     constexpr Eigen::Index block_rows = 4096;
@@ -62,59 +70,88 @@ HarmonicEquations harmonic_normal_equations(const Measurement& data, const std::
         Share& share = shares[static_cast<std::size_t>(b)];
         share.harmonic_gram.setZero();
         share.segment_harmonic = Eigen::MatrixXd::Zero(s, 2 * orders);
+        share.trend_harmonic = Eigen::MatrixXd::Zero(s, 2 * orders);
         share.harmonic_residual.setZero();
         Harmonics x;
         for (Eigen::Index t = b * block_rows; t < std::min(n, (b + 1) * block_rows); ++t) {
             write_angle_harmonics((*data.theta_e)[t], x.data());
+            const Eigen::Index k = segment_of_row[static_cast<std::size_t>(t)];
             share.harmonic_gram.selfadjointView<Eigen::Lower>().rankUpdate(x);
-            share.segment_harmonic.row(segment_of_row[static_cast<std::size_t>(t)]) += x.transpose();
+            share.segment_harmonic.row(k) += x.transpose();
+            share.trend_harmonic.row(k) += segment_trend(ranges[static_cast<std::size_t>(k)], t) * x.transpose();
             share.harmonic_residual.col(0) += residual[t] * x;
             share.harmonic_residual.col(1) += residual[n + t] * x;
         }
     });
-    const Eigen::Index columns = s + 2 * orders;
+    const Eigen::Index columns = 2 * s + 2 * orders;
     HarmonicEquations e{Eigen::MatrixXd::Zero(columns, columns), Eigen::MatrixXd::Zero(columns, 2)};
     for (Eigen::Index k = 0; k < s; ++k) {
         const auto& r = ranges[static_cast<std::size_t>(k)];
         e.gram(k, k) = static_cast<double>(r.rows);
+        double trend_sum = 0.0, trend_squares = 0.0;
+        for (Eigen::Index t = r.first; t < r.first + r.rows; ++t) {
+            const double tau = segment_trend(r, t);
+            trend_sum += tau;
+            trend_squares += tau * tau;
+            for (int a = 0; a < 2; ++a) e.moment(s + k, a) += tau * residual[a * n + t];
+        }
+        e.gram(k, s + k) = e.gram(s + k, k) = trend_sum;
+        e.gram(s + k, s + k) = trend_squares;
         for (int a = 0; a < 2; ++a) e.moment(k, a) = residual.segment(a * n + r.first, r.rows).sum();
     }
     for (const auto& share : shares) {
         e.gram.bottomRightCorner(2 * orders, 2 * orders) += share.harmonic_gram.selfadjointView<Eigen::Lower>().toDenseMatrix();
-        e.gram.topRightCorner(s, 2 * orders) += share.segment_harmonic;
+        e.gram.block(0, 2 * s, s, 2 * orders) += share.segment_harmonic;
+        e.gram.block(s, 2 * s, s, 2 * orders) += share.trend_harmonic;
         e.moment.bottomRows(2 * orders) += share.harmonic_residual;
     }
-    e.gram.bottomLeftCorner(2 * orders, s) = e.gram.topRightCorner(s, 2 * orders).transpose();
+    e.gram.bottomLeftCorner(2 * orders, 2 * s) = e.gram.topRightCorner(2 * s, 2 * orders).transpose();
     return e;
 }
 
-}  // namespace
+// The harmonics, and what each explains of the residual's sum of squares (both axes) beyond every
+// other column: c' V^-1 c per axis, V its coefficients' covariance per unit noise variance. On rows
+// spread evenly over the angle that is n |amplitude|^2 / 2; where a segment turns through less than
+// a period, the part a trend could make as well is not counted.
+struct AngleHarmonicFit {
+    std::vector<Harmonic> harmonics;
+    std::vector<double> explained;
+};
 
-std::vector<Harmonic> angle_harmonics(const Measurement& data, const Eigen::VectorXd& residual, const NoiseEstimate& noise) {
+AngleHarmonicFit fit_angle_harmonics(const Measurement& data, const Eigen::VectorXd& residual, const NoiseEstimate& noise) {
     const auto ranges = segment_ranges(data);
     const auto s = static_cast<Eigen::Index>(ranges.size());
     const HarmonicEquations e = harmonic_normal_equations(data, ranges, residual);
     const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(e.gram);
     const Eigen::MatrixXd inverse = cod.pseudoInverse();
     const Eigen::MatrixXd coefficients = inverse * e.moment;
-    std::vector<Harmonic> out;
+    AngleHarmonicFit out;
     for (int h = 1; h <= orders; ++h) {
-        const Eigen::Index c = s + 2 * (h - 1);
+        const Eigen::Index c = 2 * s + 2 * (h - 1);
         Harmonic harmonic;
         harmonic.order = h;
         const Eigen::Matrix2d block = inverse.block(c, c, 2, 2);
         harmonic.standard_error = std::sqrt(0.5 * block.trace()) * 0.5 * (noise.long_run[0] + noise.long_run[1]);
-        double p_min = 1.0;
+        const bool determined = block.determinant() > 0.0;
+        double p_min = 1.0, explained = 0.0;
         for (int a = 0; a < 2; ++a) {
             const Eigen::Vector2d ab = coefficients.block(c, a, 2, 1);
             harmonic.amplitude[a] = ab.norm();
-            const double statistic = ab.dot(block.ldlt().solve(ab)) / (noise.long_run[a] * noise.long_run[a]);
-            p_min = std::min(p_min, block.determinant() > 0.0 ? chi_squared_survival(statistic, 2.0) : 1.0);
+            const double sum_of_squares = determined ? ab.dot(block.ldlt().solve(ab)) : 0.0;
+            explained += sum_of_squares;
+            p_min = std::min(p_min, determined ? chi_squared_survival(sum_of_squares / (noise.long_run[a] * noise.long_run[a]), 2.0) : 1.0);
         }
         harmonic.p_value = p_min;
-        out.push_back(harmonic);
+        out.harmonics.push_back(harmonic);
+        out.explained.push_back(explained);
     }
     return out;
+}
+
+}  // namespace
+
+std::vector<Harmonic> angle_harmonics(const Measurement& data, const Eigen::VectorXd& residual, const NoiseEstimate& noise) {
+    return fit_angle_harmonics(data, residual, noise).harmonics;
 }
 
 namespace {
@@ -466,16 +503,19 @@ LackOfFit lack_of_fit(const Measurement& data, const ModelFit& fit, const Eigen:
     // One family: two tests (the axes) per order of either kind.
     const double tests = 2.0 * static_cast<double>((data.theta_e ? orders : 0) + static_cast<int>(mechanical.harmonics.size()));
     if (data.theta_e) {
-        l.harmonics = angle_harmonics(data, residual, noise);
-        for (auto& harmonic : l.harmonics)
+        auto fitted = fit_angle_harmonics(data, residual, noise);
+        l.harmonics = std::move(fitted.harmonics);
+        for (std::size_t k = 0; k < l.harmonics.size(); ++k) {
+            auto& harmonic = l.harmonics[k];
             if (harmonic.p_value < significance / tests) {
                 harmonic.significant = true;
                 significant = true;
-                structure_energy += 0.5 * static_cast<double>(n) * harmonic.amplitude.squaredNorm();
+                structure_energy += fitted.explained[k];
                 parts.emplace_back(harmonic.order, fmt::format("harmonic {} of the electrical angle ({:.3g} mV on u_d, {:.3g} mV on u_q, noise {:.2g} mV)",
                                                                harmonic.order, 1e3 * harmonic.amplitude[0], 1e3 * harmonic.amplitude[1],
                                                                1e3 * harmonic.standard_error));
             }
+        }
     }
     for (auto& h : mechanical.harmonics) {
         h.significant = h.p_value < significance / tests;

@@ -20,8 +20,12 @@ inline constexpr int mechanical_orders = 4;
 double chi_squared_survival(double statistic, double dof);
 
 // Harmonics 1 to harmonic_orders of the electrical angle in `residual` (both axes stacked), fitted
-// jointly with one mean per segment; each with its amplitude per axis, the standard error of an
-// amplitude component under noise alone and the p-value of the more significant axis. Needs theta_e.
+// jointly with one mean and one linear trend in time per segment; each with its amplitude per axis,
+// the standard error of an amplitude component under noise alone and the p-value of the more
+// significant axis. Needs theta_e. The trends because a segment that turns the rotor through less
+// than a period of an order makes that order's cos and sin smooth in time there, and a drift within
+// the segment (heating, a settling loop) would otherwise pass for it; where they are collinear the
+// order's standard error widens instead.
 std::vector<Harmonic> angle_harmonics(const Measurement& data, const Eigen::VectorXd& residual, const NoiseEstimate& noise);
 
 // Harmonics at mechanical orders k = 1..mechanical_orders, k not a multiple of the pole pairs, of
