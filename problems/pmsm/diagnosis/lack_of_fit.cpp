@@ -56,8 +56,8 @@ HarmonicEquations harmonic_normal_equations(const Measurement& data, const std::
     using Harmonics = Eigen::Matrix<double, 2 * orders, 1>;
     struct Share {
         Eigen::Matrix<double, 2 * orders, 2 * orders> harmonic_gram;
-        Eigen::MatrixXd segment_harmonic;  // s x 2 orders
-        Eigen::MatrixXd trend_harmonic;    // s x 2 orders
+        // s x 2 orders, row-major: each row adds to one segment's row.
+        Eigen::Matrix<double, Eigen::Dynamic, 2 * orders, Eigen::RowMajor> segment_harmonic, trend_harmonic;
         Eigen::Matrix<double, 2 * orders, 2> harmonic_residual;
     };
     constexpr Eigen::Index block_rows = 4096;
@@ -69,8 +69,8 @@ HarmonicEquations harmonic_normal_equations(const Measurement& data, const std::
     tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index b) {
         Share& share = shares[static_cast<std::size_t>(b)];
         share.harmonic_gram.setZero();
-        share.segment_harmonic = Eigen::MatrixXd::Zero(s, 2 * orders);
-        share.trend_harmonic = Eigen::MatrixXd::Zero(s, 2 * orders);
+        share.segment_harmonic.setZero(s, 2 * orders);
+        share.trend_harmonic.setZero(s, 2 * orders);
         share.harmonic_residual.setZero();
         Harmonics x;
         for (Eigen::Index t = b * block_rows; t < std::min(n, (b + 1) * block_rows); ++t) {
