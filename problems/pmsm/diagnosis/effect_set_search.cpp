@@ -158,8 +158,9 @@ RoundChoice choose_addition(const Measurement& data, const Measurement& design, 
     // is there, its segment means are part of what is left, and the best of a law's subsets (a search
     // over 14 shapes for saturation) takes them where the whole law does not. Measured: the 100 kW
     // machine's 2 % current-sensor gain error had saturation with fewer terms added in 6 of 20 study
-    // drives and 4 of 10 unseen ones, now none; the servo's saturating iron keeps 19 of 20 and 10 of
-    // 10 (docs/diagnosis.md, section 1).
+    // drives and 4 of 10 unseen ones, now none; the servo's saturating iron keeps 20 of 20 and 10 of
+    // 10 (19 of 20 while a drift within its segments passed for a third harmonic, until the
+    // harmonics' test took each segment's trend; docs/diagnosis.md, sections 1 and 3).
     const auto fewer_terms_withheld = [&](const Addition& a) {
         return options.reduced_laws && make_effect(a.effect)->law_terms().size() > 1 && outside_left();
     };

@@ -1,8 +1,8 @@
 #pragma once
 // Lack of fit: structure in a residual beyond the noise. The segment means (each one's variance
 // under noise alone is the long-run variance over its rows) and, when the angle is logged, the
-// harmonics of the electrical angle fitted jointly with them; when the shaft's angle is known, the
-// harmonics at mechanical orders too.
+// harmonics of the electrical angle fitted jointly with them and each segment's trend in time; when
+// the shaft's angle is known, the harmonics at mechanical orders too.
 #include <string>
 #include <vector>
 
