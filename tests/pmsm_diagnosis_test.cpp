@@ -11,6 +11,7 @@
 
 #include "problems/pmsm/data/measurement.hpp"
 #include "problems/pmsm/report/diagnosis_report.hpp"
+#include "tests/gnuplot_data_rows.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -133,6 +134,22 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
                             "segment_rms.png", "apparent_parameters.png", "candidates.png", "path.png"})
         CHECK(md.find(png) != std::string::npos);
     CHECK(images == 9);
+    // Beside base, the plots and the table of segments show what the recommended model leaves: its
+    // residual, recomputed for the plot from its parameters, has the rms its fit in the search had.
+    CHECK(md.find("rms recommended") != std::string::npos);
+    const auto rows = mhb::testing::data_rows(report / "plot-data" / "residual_time.dat");
+    std::size_t logged = 0;
+    for (const auto& segment : j["segments"]) logged += segment["rows"].get<std::size_t>();
+    REQUIRE(rows.size() == logged);
+    double squares = 0.0;
+    for (const auto& row : rows) {
+        REQUIRE(row.size() == 7);  // x, the model's r_d r_q, base's, the recommended model's
+        squares += row[5] * row[5] + row[6] * row[6];
+    }
+    CHECK(std::sqrt(squares / (2.0 * static_cast<double>(rows.size()))) == Approx(j["path"][1]["rms"].get<double>()).epsilon(1e-5));
+    CHECK(mhb::testing::read_file(report / "plot-data" / "residual_time.gp").find("recommended base+encoder_offset") != std::string::npos);
+    const auto bars = mhb::testing::read_file(report / "plot-data" / "segment_rms.dat");
+    CHECK(bars.find("recommended_total") != std::string::npos);
 
     // The next round shows the error before and after.
     run = run_mhbench("diagnose --data " + csv.string() + " --model base+encoder_offset --report " + report.string(), dir.path() / "log");
@@ -143,6 +160,9 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
     CHECK(after.find("Error before and after the effects") != std::string::npos);
     CHECK(after.find("| `base` |") != std::string::npos);
     CHECK(after.find("| `base+encoder_offset` |") != std::string::npos);
+    // The model diagnosed is the one recommended: nothing is drawn twice.
+    CHECK(after.find("rms recommended") == std::string::npos);
+    for (const auto& row : mhb::testing::data_rows(report / "plot-data" / "residual_time.dat")) CHECK(row.size() == 5);
 
     run = run_mhbench("diagnose --data " + csv.string() + " --model 'base+rs_thermal(alpha=0.01)'", dir.path() / "log");
     CHECK(run.exit_code == 2);

@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/gnuplot_data_rows.hpp"
 #include "tests/pmsm_diagnosis_fixture.hpp"
 #include "tests/temporary_directory.hpp"
 
@@ -37,20 +38,6 @@ std::vector<ListedWindow> listed_windows(const std::filesystem::path& file) {
         ListedWindow w;
         fields >> w.label >> w.first_row >> w.rows >> w.x_first >> w.x_last;
         out.push_back(w);
-    }
-    return out;
-}
-
-// Rows of numbers of a gnuplot data file, comments left out.
-std::vector<std::vector<double>> data_rows(const std::filesystem::path& file) {
-    std::ifstream in(file);
-    std::vector<std::vector<double>> out;
-    for (std::string line; std::getline(in, line);) {
-        if (line.empty() || line[0] == '#') continue;
-        std::istringstream fields(line);
-        std::vector<double> row;
-        for (double v; fields >> v;) row.push_back(v);
-        out.push_back(row);
     }
     return out;
 }
@@ -120,7 +107,7 @@ TEST_CASE("a raw log's report shows the log with the windows of its operating_po
 
     // The log is drawn as 1000 columns of extremes: 2000 lines, the spike among them, and every
     // channel's range that of the log.
-    const auto drawn = data_rows(report / "plot-data" / "operating_points_log.dat");
+    const auto drawn = mhb::testing::data_rows(report / "plot-data" / "operating_points_log.dat");
     REQUIRE(drawn.size() == 2000);
     const std::vector<const Eigen::VectorXd*> channels{&log.i_d, &log.i_q, &log.omega_e, &log.u_d, &log.u_q};
     for (std::size_t c = 0; c < channels.size(); ++c) {
@@ -184,7 +171,7 @@ TEST_CASE("a long record's residual plots are drawn from each run's extremes, a 
     REQUIRE(run.exit_code == 0);
     for (const char* plot : {"residual_time", "residual_angle"}) {
         INFO(plot);
-        const auto drawn = data_rows(report / "plot-data" / (std::string(plot) + ".dat"));
+        const auto drawn = mhb::testing::data_rows(report / "plot-data" / (std::string(plot) + ".dat"));
         CHECK(drawn.size() <= 4000);
         CHECK(drawn.size() >= 2000);
         // The spike's residual is about the spike itself (the model predicts a few volts there).

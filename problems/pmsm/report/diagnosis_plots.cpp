@@ -42,6 +42,7 @@ const char* axis_name(int a) { return a == 0 ? "u_d" : "u_q"; }
 
 constexpr const char* model_colour = "#1b6fb5";
 constexpr const char* before_colour = "#b0b0b0";
+constexpr const char* recommended_colour = "#2e8b57";
 
 std::string segment_lines(const Diagnosis& d, const Measurement& data) {
     std::string out;
@@ -53,10 +54,14 @@ std::string segment_lines(const Diagnosis& d, const Measurement& data) {
     return out;
 }
 
-// The model's and the base model's residuals (residual_of), which the two plots below share.
+// The model's and the base model's residuals (residual_of), which the two plots below share, and
+// the recommended model's when the search recommends another than these: the same plots then show
+// what the recommendation leaves beside what the model diagnosed leaves.
 struct PlottedResiduals {
-    Eigen::VectorXd model, base;
+    Eigen::VectorXd model, base, recommended;
 };
+
+std::string recommended_title(const ModelFit& fit) { return "recommended " + fit.spec.text(); }
 
 // Writes x(k) and each series' value at row k, a row per line, for the n rows in order; more than
 // `most` rows as each of `columns` runs of consecutive rows in two lines: every series' lowest and
@@ -102,17 +107,23 @@ std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measuremen
     const auto& base = d.build_up.front();
     const Eigen::VectorXd& model_residual = residuals.model;
     const Eigen::VectorXd& base_residual = residuals.base;
+    const Eigen::VectorXd& recommended_residual = residuals.recommended;
+    const ModelFit* recommended = recommended_to_show(d);
     const fs::path file = plot.data("residual_time");
     std::ofstream out(file);
     const bool extremes = n > residual_plot_rows;
-    out << (extremes ? fmt::format("# x r_d r_q before_r_d before_r_q (V): each of {} runs of rows as its lowest and highest values\n",
-                                   residual_plot_columns)
-                     : std::string("# x r_d r_q before_r_d before_r_q (V)\n"));
+    const std::string columns = std::string("x r_d r_q before_r_d before_r_q") + (recommended ? " recommended_r_d recommended_r_q" : "");
+    out << (extremes ? fmt::format("# {} (V): each of {} runs of rows as its lowest and highest values\n", columns, residual_plot_columns)
+                     : fmt::format("# {} (V)\n", columns));
     using Row = std::function<double(Eigen::Index)>;
-    write_rows_or_extremes(out, n, residual_plot_rows, residual_plot_columns,
-                           [&](Eigen::Index k) { return data.t ? (*data.t)[k] : static_cast<double>(k); },
-                           std::vector<Row>{[&](Eigen::Index k) { return model_residual[k]; }, [&](Eigen::Index k) { return model_residual[n + k]; },
-                                            [&](Eigen::Index k) { return base_residual[k]; }, [&](Eigen::Index k) { return base_residual[n + k]; }});
+    std::vector<Row> series{[&](Eigen::Index k) { return model_residual[k]; }, [&](Eigen::Index k) { return model_residual[n + k]; },
+                            [&](Eigen::Index k) { return base_residual[k]; }, [&](Eigen::Index k) { return base_residual[n + k]; }};
+    if (recommended) {
+        series.emplace_back([&](Eigen::Index k) { return recommended_residual[k]; });
+        series.emplace_back([&](Eigen::Index k) { return recommended_residual[n + k]; });
+    }
+    write_rows_or_extremes(out, n, residual_plot_rows, residual_plot_columns, [&](Eigen::Index k) { return data.t ? (*data.t)[k] : static_cast<double>(k); },
+                           series);
     out.close();
     const std::string title = std::string("Residual (logged minus predicted voltage) through the record; dotted lines: segment changes") +
                               (extremes ? fmt::format("; band: the extremes of each run of about {} of the {} rows",
@@ -132,6 +143,11 @@ std::string residual_vs_time(Plotter& plot, const Diagnosis& d, const Measuremen
                                  before_colour, gnuplot_quote(fmt::format("base: {} mV rms", mv(a == 0 ? base.rms.d : base.rms.q))));
         plots += fmt::format("{} using 1:{} {} lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()), 2 + a, style,
                              model_colour, gnuplot_quote(fmt::format("{}: {} mV rms", d.model.spec.text(), mv(a == 0 ? d.model.rms.d : d.model.rms.q))));
+        // Drawn last, over the model diagnosed: what the recommendation leaves lies inside its spread.
+        if (recommended)
+            plots += fmt::format(", {} using 1:{} {} lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()), 6 + a, style, recommended_colour,
+                                 gnuplot_quote(fmt::format("{}: {} mV rms", recommended_title(*recommended),
+                                                           mv(a == 0 ? recommended->rms.d : recommended->rms.q))));
         body += "plot " + plots + "\nunset arrow\n";
     }
     body += "unset multiplot\n";
@@ -142,39 +158,51 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     if (!data.theta_e) return {};
     const Eigen::Index n = data.size();
     const bool before = d.build_up.size() > 1;
+    const ModelFit* recommended = recommended_to_show(d);
+    const Eigen::Index width = recommended ? 6 : 4;  // r_d r_q before_r_d before_r_q [recommended_r_d recommended_r_q]
     const fs::path samples = plot.data("residual_angle"), bins = plot.data("residual_angle_bins");
     std::ofstream out(samples);
-    out << "# theta_deg r_d r_q before_r_d before_r_q\n";
+    out << (recommended ? "# theta_deg r_d r_q before_r_d before_r_q recommended_r_d recommended_r_q\n" : "# theta_deg r_d r_q before_r_d before_r_q\n");
     const int count = 72;
-    Eigen::ArrayXXd sum = Eigen::ArrayXXd::Zero(count, 4);
+    Eigen::ArrayXXd sum = Eigen::ArrayXXd::Zero(count, width);
     Eigen::ArrayXd hits = Eigen::ArrayXd::Zero(count);
     // Deviations from each segment's mean: the operating points' offsets would otherwise hide what
     // repeats with the angle.
-    Eigen::VectorXd model_dev = residuals.model, base_dev = residuals.base;
-    for (const auto& s : d.segments)
+    Eigen::VectorXd model_dev = residuals.model, base_dev = residuals.base, recommended_dev = residuals.recommended;
+    for (std::size_t k = 0; k < d.segments.size(); ++k) {
+        const auto& s = d.segments[k];
         for (int a = 0; a < 2; ++a) {
             model_dev.segment(a * n + s.first, s.rows).array() -= s.model.mean[a];
             base_dev.segment(a * n + s.first, s.rows).array() -= s.before.mean[a];
+            if (recommended) recommended_dev.segment(a * n + s.first, s.rows).array() -= recommended->segments[k].mean[a];
         }
+    }
     // A longer record: each of residual_plot_columns columns of angle as its lowest and highest
     // value of each series, at the column's centre (the bins' means below stay the mean of all rows).
     const bool extremes = n > residual_plot_rows;
     const Eigen::Index angle_columns = residual_plot_columns;
     Eigen::ArrayXXd lowest, highest;
     if (extremes) {
-        lowest = Eigen::ArrayXXd::Constant(angle_columns, 4, std::numeric_limits<double>::infinity());
-        highest = Eigen::ArrayXXd::Constant(angle_columns, 4, -std::numeric_limits<double>::infinity());
+        lowest = Eigen::ArrayXXd::Constant(angle_columns, width, std::numeric_limits<double>::infinity());
+        highest = Eigen::ArrayXXd::Constant(angle_columns, width, -std::numeric_limits<double>::infinity());
     }
+    auto write_line = [&](double x, const auto& values) {
+        out << fmt::format("{:.6g}", x);
+        for (Eigen::Index c = 0; c < width; ++c) out << fmt::format(" {:.6g}", values(c));
+        out << "\n";
+    };
+    Eigen::ArrayXd r(width);
     for (Eigen::Index k = 0; k < n; ++k) {
         const double deg = wrap_angle((*data.theta_e)[k]) * 180.0 / std::numbers::pi;
-        const Eigen::Array4d r(model_dev[k], model_dev[n + k], base_dev[k], base_dev[n + k]);
+        r.head(4) << model_dev[k], model_dev[n + k], base_dev[k], base_dev[n + k];
+        if (recommended) r.tail(2) << recommended_dev[k], recommended_dev[n + k];
         if (extremes) {
             const Eigen::Index c = std::clamp(static_cast<Eigen::Index>((deg + 180.0) / 360.0 * static_cast<double>(angle_columns)), Eigen::Index{0},
                                               angle_columns - 1);
             lowest.row(c) = lowest.row(c).min(r.transpose());
             highest.row(c) = highest.row(c).max(r.transpose());
         } else {
-            out << fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n", deg, r[0], r[1], r[2], r[3]);
+            write_line(deg, r);
         }
         const int b = std::clamp(static_cast<int>((deg + 180.0) / 360.0 * count), 0, count - 1);
         sum.row(b) += r.transpose();
@@ -183,12 +211,13 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
     for (Eigen::Index c = 0; extremes && c < angle_columns; ++c) {
         if (!std::isfinite(lowest(c, 0))) continue;
         const double centre = -180.0 + (static_cast<double>(c) + 0.5) * 360.0 / static_cast<double>(angle_columns);
-        for (const auto* edge : {&lowest, &highest})
-            out << fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n", centre, (*edge)(c, 0), (*edge)(c, 1), (*edge)(c, 2), (*edge)(c, 3));
+        write_line(centre, lowest.row(c));
+        write_line(centre, highest.row(c));
     }
     out.close();
     std::ofstream mean(bins);
-    mean << "# bin_centre_deg mean_r_d mean_r_q before_mean_r_d before_mean_r_q\n";
+    mean << (recommended ? "# bin_centre_deg mean_r_d mean_r_q before_mean_r_d before_mean_r_q recommended_mean_r_d recommended_mean_r_q\n"
+                         : "# bin_centre_deg mean_r_d mean_r_q before_mean_r_d before_mean_r_q\n");
     for (int b = 0; b < count; ++b) {
         // A blank line where no sample fell: gnuplot breaks the line there instead of drawing one
         // across angles the log never reached.
@@ -197,7 +226,7 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
             continue;
         }
         mean << fmt::format("{:.6g}", -180.0 + (b + 0.5) * 360.0 / count);
-        for (int c = 0; c < 4; ++c) mean << fmt::format(" {:.6g}", sum(b, c) / hits[b]);
+        for (Eigen::Index c = 0; c < width; ++c) mean << fmt::format(" {:.6g}", sum(b, c) / hits[b]);
         mean << "\n";
     }
     mean.close();
@@ -218,6 +247,11 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
         plots += fmt::format("{} using 1:{} {} lc rgb '#9ec5e8' notitle, {} using 1:{} with lines lw 2 lc rgb '{}' title {} noenhanced",
                              gnuplot_quote(samples.string()), 2 + a, style, gnuplot_quote(bins.string()), 2 + a, model_colour,
                              gnuplot_quote(d.model.spec.text()));
+        // Only the recommendation's bin means: its samples would cover the model's, whose pattern
+        // against the angle is what this plot is for.
+        if (recommended)
+            plots += fmt::format(", {} using 1:{} with lines lw 2 lc rgb '{}' title {} noenhanced", gnuplot_quote(bins.string()), 6 + a, recommended_colour,
+                                 gnuplot_quote(recommended_title(*recommended)));
         body += "plot " + plots + "\n";
     }
     body += "unset multiplot\n";
@@ -228,12 +262,15 @@ std::string residual_vs_angle(Plotter& plot, const Diagnosis& d, const Measureme
 fs::path write_segment_means(Plotter& plot, const Diagnosis& d) {
     const fs::path file = plot.data("segment_means");
     std::ofstream out(file);
-    out << "# index omega_e i_d i_q |i| temp_winding temp_magnet mean_d se_d mean_q se_q before_d before_q label\n";
+    const ModelFit* recommended = recommended_to_show(d);
+    out << "# index omega_e i_d i_q |i| temp_winding temp_magnet mean_d se_d mean_q se_q before_d before_q recommended_d recommended_q label "
+           "(recommended: NaN when the model diagnosed is the one recommended)\n";
     for (std::size_t s = 0; s < d.segments.size(); ++s) {
         const auto& c = d.segments[s];
-        out << fmt::format("{} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {}\n", s, c.omega, c.i_d, c.i_q,
-                           std::hypot(c.i_d, c.i_q), c.temp_winding.value_or(NAN), c.temp_magnet.value_or(NAN), c.model.mean[0],
-                           c.mean_standard_error[0], c.model.mean[1], c.mean_standard_error[1], c.before.mean[0], c.before.mean[1],
+        const Eigen::Vector2d after = recommended ? recommended->segments[s].mean : Eigen::Vector2d::Constant(NAN);
+        out << fmt::format("{} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {}\n", s, c.omega, c.i_d,
+                           c.i_q, std::hypot(c.i_d, c.i_q), c.temp_winding.value_or(NAN), c.temp_magnet.value_or(NAN), c.model.mean[0],
+                           c.mean_standard_error[0], c.model.mean[1], c.mean_standard_error[1], c.before.mean[0], c.before.mean[1], after[0], after[1],
                            gnuplot_quote(c.label));
     }
     return file;
@@ -242,6 +279,7 @@ fs::path write_segment_means(Plotter& plot, const Diagnosis& d) {
 std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& file, const std::string& name, const std::string& title,
                           const std::vector<std::pair<int, std::string>>& variables) {
     const bool before = d.build_up.size() > 1;
+    const ModelFit* recommended = recommended_to_show(d);
     // One row per variable, u_d beside u_q: two panels a row stay readable on a laptop's screen, where
     // three side by side (current: i_d, i_q, |i|) would have to shrink to two thirds.
     const auto rows = static_cast<int>(variables.size());
@@ -257,6 +295,9 @@ std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& fil
                                      column, 12 + a);
             plots += fmt::format("{} using {}:{}:(2*${}) with yerrorbars pt 7 ps 1.0 lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()),
                                  column, 8 + 2 * a, 9 + 2 * a, model_colour, gnuplot_quote(d.model.spec.text() + " (+-2 SE of noise)"));
+            if (recommended)
+                plots += fmt::format(", {} using {}:{} with points pt 9 ps 1.3 lc rgb '{}' title {} noenhanced", gnuplot_quote(file.string()), column,
+                                     14 + a, recommended_colour, gnuplot_quote(recommended_title(*recommended)));
             body += "plot " + plots + "\n";
         }
     body += "unset multiplot\n";
@@ -264,22 +305,31 @@ std::string means_against(Plotter& plot, const Diagnosis& d, const fs::path& fil
 }
 
 std::string segment_rms_bars(Plotter& plot, const Diagnosis& d) {
+    const ModelFit* recommended = recommended_to_show(d);
     const fs::path file = plot.data("segment_rms");
     std::ofstream out(file);
-    out << "# label before_total model_total\n";
-    for (const auto& c : d.segments) out << fmt::format("{} {:.6g} {:.6g}\n", gnuplot_data_string(c.label), c.before.rms.total, c.model.rms.total);
+    out << (recommended ? "# label before_total model_total recommended_total\n" : "# label before_total model_total\n");
+    for (std::size_t s = 0; s < d.segments.size(); ++s) {
+        const auto& c = d.segments[s];
+        out << fmt::format("{} {:.6g} {:.6g}", gnuplot_data_string(c.label), c.before.rms.total, c.model.rms.total);
+        if (recommended) out << fmt::format(" {:.6g}", recommended->segments[s].rms.total);
+        out << "\n";
+    }
     out.close();
     const double floor = std::sqrt((d.noise.sigma.squaredNorm()) / 2.0);
     std::string body = fmt::format("set title {} noenhanced\nset style data histograms\nset style histogram clustered gap 1\n",
                                    gnuplot_quote("Residual rms per segment (u_d and u_q combined); dashed: noise floor"));
     body += "set style fill solid 0.85 border -1\nset boxwidth 0.9\nset grid y\nset ylabel 'rms residual (V)'\nset yrange [0:*]\n";
     body += "set xtics rotate by -35 noenhanced font ',9'\nset key top right\nset bmargin 9\n";
+    // Each bar series: its column and how it is drawn; the first carries the segments' labels.
+    std::vector<std::pair<int, std::string>> bars;
+    if (d.build_up.size() > 1) bars.emplace_back(2, fmt::format("lc rgb '{}' title 'base'", before_colour));
+    bars.emplace_back(3, fmt::format("lc rgb '{}' title {} noenhanced", model_colour, gnuplot_quote(d.model.spec.text())));
+    if (recommended) bars.emplace_back(4, fmt::format("lc rgb '{}' title {} noenhanced", recommended_colour, gnuplot_quote(recommended_title(*recommended))));
     std::string plots;
-    if (d.build_up.size() > 1)
-        plots += fmt::format("{} using 2:xtic(1) lc rgb '{}' title 'base', ", gnuplot_quote(file.string()), before_colour);
-    plots += fmt::format("{} using 3{} lc rgb '{}' title {} noenhanced, {:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {}", gnuplot_quote(file.string()),
-                         d.build_up.size() > 1 ? "" : ":xtic(1)", model_colour, gnuplot_quote(d.model.spec.text()), floor,
-                         gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))));
+    for (std::size_t k = 0; k < bars.size(); ++k)
+        plots += fmt::format("{} using {}{} {}, ", gnuplot_quote(file.string()), bars[k].first, k == 0 ? ":xtic(1)" : "", bars[k].second);
+    plots += fmt::format("{:.6g} with lines dt 2 lw 2 lc rgb '#c0392b' title {}", floor, gnuplot_quote(fmt::format("noise floor {} mV", mv(floor))));
     body += "plot " + plots + "\n";
     return plot.render("segment_rms", body, 1100, 600);
 }
@@ -501,6 +551,14 @@ std::string operating_points_plot(Plotter& plot, const FoundOperatingPoints& fou
 
 }  // namespace
 
+const ModelFit* recommended_to_show(const Diagnosis& d) {
+    const std::string text = d.recommended.text();
+    if (text.empty() || text == d.model.spec.text() || (d.build_up.size() > 1 && text == d.build_up.front().spec.text())) return nullptr;
+    const ModelFit& fit = d.recommended_fit();
+    if (fit.spec.text() != text || fit.segments.size() != d.segments.size()) return nullptr;
+    return &fit;
+}
+
 DiagnosisPlots draw_diagnosis_plots(const fs::path& directory, const Measurement& data, const Diagnosis& d, ReportOutcome& outcome,
                                     const FoundOperatingPoints* found) {
     DiagnosisPlots out;
@@ -510,6 +568,7 @@ DiagnosisPlots draw_diagnosis_plots(const fs::path& directory, const Measurement
     Eigen::VectorXd storage;
     residuals.model = residual_of(data, d.model, storage);
     residuals.base = residual_of(data, d.build_up.front(), storage);
+    if (const ModelFit* recommended = recommended_to_show(d)) residuals.recommended = residual_of(data, *recommended, storage);
     out.time = residual_vs_time(plot, d, data, residuals);
     out.angle = residual_vs_angle(plot, d, data, residuals);
     const fs::path means = write_segment_means(plot, d);

@@ -16,6 +16,11 @@ struct DiagnosisPlots {
     std::string time, angle, speed, current, temperature, rms, apparent, candidates, path, operating_points;
 };
 
+// The recommended model's fit, which the residual plots and the table of segments show beside the
+// model diagnosed, when it is neither that model nor the base model they already show and its
+// segment summaries line up with the diagnosis' segments; else null.
+const ModelFit* recommended_to_show(const Diagnosis& d);
+
 DiagnosisPlots draw_diagnosis_plots(const std::filesystem::path& directory, const Measurement& data, const Diagnosis& d,
                                     ReportOutcome& outcome, const FoundOperatingPoints* found = nullptr);
 

@@ -129,8 +129,11 @@ void add_where_it_fails(Document& doc, const Diagnosis& d, const Measurement& da
     if (tm) segment_columns.emplace_back("T_m", "°C");
     if (base_shown) segment_columns.emplace_back("rms base", "mV");
     for (const char* name : {"rms", "mean u_d ± SE", "mean u_q ± SE"}) segment_columns.emplace_back(name, "mV");
+    const ModelFit* recommended = recommended_to_show(d);
+    if (recommended) segment_columns.emplace_back("rms recommended", "mV");
     Table segments("residual per segment", std::move(segment_columns));
-    for (const auto& s : d.segments) {
+    for (std::size_t k = 0; k < d.segments.size(); ++k) {
+        const auto& s = d.segments[k];
         std::vector<Cell> row{s.label, fmt::format("{:.2f}", s.omega), fmt::format("{:.4f}", s.i_d), fmt::format("{:.4f}", s.i_q)};
         if (tw) row.emplace_back(fmt::format("{:.1f}", *s.temp_winding));
         if (tm) row.emplace_back(fmt::format("{:.1f}", *s.temp_magnet));
@@ -138,9 +141,14 @@ void add_where_it_fails(Document& doc, const Diagnosis& d, const Measurement& da
         row.emplace_back(mv(s.model.rms.total));
         row.emplace_back(mv(s.model.mean[0]) + " ± " + mv(s.mean_standard_error[0]));
         row.emplace_back(mv(s.model.mean[1]) + " ± " + mv(s.mean_standard_error[1]));
+        if (recommended) row.emplace_back(mv(recommended->segments[k].rms.total));
         segments.add_row(std::move(row));
     }
     doc.add(std::move(segments));
+    if (recommended)
+        doc.add(Paragraph{fmt::format("\"rms recommended\" and the green marks in the plots below: the residual of the recommended model, `{}` ({} mV "
+                                      "combined), beside the model diagnosed.",
+                                      recommended->spec.text(), mv(recommended->rms.total))});
     const auto& l = d.lack_of_fit;
     if (l.means_available)
         doc.add(Paragraph{fmt::format("Segment means against the noise: chi-square {:.1f} on {} degrees of freedom, p = {:.2g}{}.", l.statistic, l.dof,
