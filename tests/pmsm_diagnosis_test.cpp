@@ -121,6 +121,9 @@ TEST_CASE("mhbench diagnose writes the JSON contract and a report with plots, be
         if (!l["limit"].is_null()) CHECK((l["set_by"] == "evidence" || l["set_by"] == "relevant size"));
     }
     CHECK(dead_time_voltage);
+    // No law with a stated accuracy is in the recommended set: nothing stands in for one.
+    CHECK(j["law_stand_ins"].is_array());
+    CHECK(j["law_stand_ins"].empty());
 
     // The report: every image it shows exists, and it names the missing effect.
     const std::string md = mhb::testing::read_file(report / "report.md");

@@ -5,6 +5,7 @@
 #include "problems/pmsm/diagnosis/findings.hpp"
 #include "problems/pmsm/diagnosis/interval_caveats.hpp"
 #include "problems/pmsm/diagnosis/library_orders.hpp"
+#include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
 
 namespace mhb::pmsm {
@@ -85,6 +86,7 @@ Diagnosis diagnose(const Measurement& data, const ModelSpec& spec, const Diagnos
     for (const auto& h : trace.left[r.step].mechanical_harmonics)
         if (h.significant) out.mechanical_left.push_back(h);
     out.interval_caveats = interval_caveats(data, out, options.fit);
+    out.law_stand_ins = law_stand_ins(data, out);
     if (options.timing.control_period > 0.0)
         out.sample_and_hold = SampleAndHold{options.timing, sample_and_hold_bias(data, out.recommended_fit().values.head<4>(), options.timing)};
     out.shared_noise = shared_noise_bias(data, out.recommended_fit());

@@ -203,6 +203,18 @@ struct PathStep {
     }
 };
 
+// An effect of the recommended set, added after a law with a stated accuracy (Effect::law_accuracy),
+// whose addition changed the modelled voltage by no more than that accuracy lets the law's own error
+// change it: it may stand in for the law's misfit rather than be in the machine (on the Baldor map
+// with generating operating points, an encoder offset the plant lacks; docs/effects.md, "The Baldor
+// study").
+struct LawStandIn {
+    std::string effect;
+    std::string law;             // LawAllowance::source: "saturation (2 % of the flux linkage)"
+    double change_rms = 0.0;     // V: what adding it changed in the prediction, rms over rows and axes
+    double allowance_rms = 0.0;  // V: the law's stated error, accuracy |u - R_s i|, rms over the same
+};
+
 struct NotTried {
     std::string effect;
     std::string column;  // the column the data lack
@@ -360,6 +372,8 @@ struct Diagnosis {
     // What the recommended model's intervals do not hold although it leaves only noise; the findings
     // state each one.
     std::vector<IntervalCaveat> interval_caveats;
+    // The effects of the recommended set that may stand in for a law's misfit (law_stand_ins).
+    std::vector<LawStandIn> law_stand_ins;
     // With DiagnosisOptions::control_period: what its sample and hold does to the recommended model's base parameters.
     std::optional<SampleAndHold> sample_and_hold;
     // What noise the current and the voltage share does to the recommended model's base parameters

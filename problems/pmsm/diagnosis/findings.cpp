@@ -352,6 +352,12 @@ std::vector<std::string> findings_of(const Diagnosis& d, const LackOfFit& left_b
                                     "is still missing{}.",
                                     c.effect, 100.0 * c.explained, c.delta_bic, c.implausible.front(), other_missing_effect(d, c.effect)));
     for (const auto& p : d.pruned) f.push_back(p + " was added on the way and pruned again: the other effects of the set explain it.");
+    for (const auto& s : d.law_stand_ins)
+        f.push_back(fmt::format("{} may stand in for the misfit of a law rather than be in the machine: adding it changed the modelled voltage by {:.4g} V "
+                                "rms, no more than the stated accuracy of {} lets that law's own error change it ({:.4g} V rms). They differ where "
+                                "the law's flux error is small against the effect's own voltage (at standstill or low speed for a turn of the "
+                                "frame such as an encoder offset); docs/effects.md, \"The Baldor study\".",
+                                s.effect, s.change_rms, s.law, s.allowance_rms));
     unresolved_findings(d, left_by_last_step, floor_tolerance, f);
     // Strong evidence that a leave-one-segment-out check turned down: the log's operating points do
     // not pin the effect's shape, which more of them would.

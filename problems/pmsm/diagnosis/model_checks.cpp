@@ -103,6 +103,25 @@ LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const N
     return out;
 }
 
+std::vector<LawStandIn> law_stand_ins(const Measurement& data, const Diagnosis& d) {
+    std::vector<LawStandIn> out;
+    const std::size_t last = d.recommended_step;
+    if (last >= d.path.size() || d.path[last].fit.spec.text() != d.recommended.text()) return out;
+    const double rows = static_cast<double>(data.size());
+    const double noise_power = rows * d.noise.sigma.squaredNorm();
+    Eigen::VectorXd before_storage, after_storage;
+    for (std::size_t k = 1; k <= last; ++k) {
+        const PathStep& before = d.path[k - 1];
+        const PathStep& step = d.path[k];
+        if (step.kind != StepKind::Added || !(before.allowance.power > 0.0) || !d.recommended.contains(step.effect)) continue;
+        const double change = (residual_of(data, before.fit, before_storage) - residual_of(data, step.fit, after_storage)).squaredNorm();
+        const double allowance = before.allowance.power * noise_power;
+        if (change > allowance) continue;
+        out.push_back({step.effect, before.allowance.source, std::sqrt(change / (2.0 * rows)), std::sqrt(allowance / (2.0 * rows))});
+    }
+    return out;
+}
+
 bool at_noise_floor(const LackOfFit& left, double floor_tolerance, const LawAllowance& allowance) {
     return !left.significant || left.structure < floor_tolerance + allowance.power;
 }

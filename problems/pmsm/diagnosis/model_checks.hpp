@@ -35,6 +35,13 @@ HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& cand
 // (u - Rs i, every row), relative to the noise power. Zero when no law states an error.
 LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise);
 
+// Each effect of d's recommended set added on its search path after a law with a stated accuracy
+// whose addition changed the prediction (residual before less residual after, over every row of
+// `data`) by no more energy than the law's stated error may have (LawAllowance of the set it was
+// added to): a size test, not a shape test, so a real effect that small is named too, rightly (the
+// law could have made it). Effects added before the law, or pruned again, are not judged.
+std::vector<LawStandIn> law_stand_ins(const Measurement& data, const Diagnosis& d);
+
 // Whether what `left` measures is at the noise floor: nothing significant, or less than the
 // tolerance (DiagnosisOptions::floor_tolerance) and the laws' allowance.
 bool at_noise_floor(const LackOfFit& left, double floor_tolerance, const LawAllowance& allowance);

@@ -113,6 +113,10 @@ json diagnosis_json(const Diagnosis& d) {
                           {"typical", l.typical},
                           {"set_by", l.set_by() ? json(l.set_by()) : json(nullptr)}});
     out["detection_limits"] = limits;
+    json stand_ins = json::array();
+    for (const auto& s : d.law_stand_ins)
+        stand_ins.push_back({{"effect", s.effect}, {"law", s.law}, {"change_rms", s.change_rms}, {"allowance_rms", s.allowance_rms}});
+    out["law_stand_ins"] = stand_ins;
     json candidates = json::array();
     for (const auto& c : d.candidates) {
         json e;
