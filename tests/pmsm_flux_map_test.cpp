@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -77,6 +78,24 @@ Measurement study_drive(const std::string& file, const std::string& only, std::u
     const auto cases = study_cases(spec);
     REQUIRE(cases.size() == 1);
     return simulate(parse_simulation_profile(case_profile(spec, cases.front(), seed), file, spec.profile.parent_path())).data;
+}
+
+// A study drive (study_drive, seed 1) and its diagnosis from the base model with the default options.
+struct DiagnosedDrive {
+    Measurement data;
+    Diagnosis d;
+};
+DiagnosedDrive diagnosed_drive(const std::string& file, const std::string& only) {
+    Measurement data = study_drive(file, only, 1);
+    Diagnosis d = diagnose(data, parse_model_spec("base"), DiagnosisOptions{});
+    return {std::move(data), std::move(d)};
+}
+
+// The recommended model's interval caveat whose reason holds `text`, or null.
+const IntervalCaveat* caveat_with(const Diagnosis& d, const std::string& text) {
+    const auto found = std::find_if(d.interval_caveats.begin(), d.interval_caveats.end(),
+                                    [&](const IntervalCaveat& c) { return c.reason.find(text) != std::string::npos; });
+    return found == d.interval_caveats.end() ? nullptr : &*found;
 }
 
 }  // namespace
@@ -229,8 +248,7 @@ TEST_CASE("on the measured map at high speed and large currents, what the satura
     // One drive of the Baldor study's design high_large_quiet (experiments/pmsm/baldor_study.toml):
     // there the law leaves volts of structure, and before the laws' accuracy was stated an encoder
     // offset took a tenth of it in 16 of 20 drives. The rate is the study's; this is one example.
-    const Measurement data = study_drive("baldor_study.toml", "high_large_quiet/clean", 1);
-    const Diagnosis d = diagnose(data, parse_model_spec("base"), DiagnosisOptions{});
+    const auto [data, d] = diagnosed_drive("baldor_study.toml", "high_large_quiet/clean");
     CHECK(d.recommended.text() == "base+saturation");
     const PathStep& last = d.path.back();
     CHECK(last.fit.spec.text() == "base+saturation");
@@ -253,6 +271,28 @@ TEST_CASE("on the measured map at high speed and large currents, what the satura
     CHECK(d.path.front().allowance.power == 0.0);
     // Nothing was added after the law, so nothing can stand in for it.
     CHECK(d.law_stand_ins.empty());
+    // The design's three points at -950 r/min never reach that speed (logged at +217 to +235 rad/s,
+    // i_q at the current limit, -28 to -31 A): they generate, so the power flows both ways and no
+    // caveat says otherwise.
+    CHECK(caveat_with(d, "every logged operating point") == nullptr);
+}
+
+TEST_CASE("on the measured map with every point motoring, the R_s interval says that R_s may take part of the saturation law's misfit "
+          "(an example: one drive)",
+          "[pmsm][flux_map][diagnosis]") {
+    // Seed 1 of baldor_study's mid_large_quiet, whose R_s is 8 % off in the median over its 20 drives
+    // (and within 1 % when its negative direction generates: baldor_generating_study).
+    const auto [data, d] = diagnosed_drive("baldor_study.toml", "mid_large_quiet/clean");
+    REQUIRE(d.recommended.text() == "base+saturation");
+    for (const auto& s : d.segments) CHECK(s.omega * s.i_q > 0.0);
+    const IntervalCaveat* power_flow = caveat_with(d, "every logged operating point motors");
+    REQUIRE(power_flow != nullptr);
+    CHECK(power_flow->reason.rfind("every logged operating point motors", 0) == 0);
+    CHECK(power_flow->base == std::array<bool, 4>{true, false, false, false});
+    CHECK(std::any_of(d.findings.begin(), d.findings.end(), [](const std::string& f) {
+        return f.find("every logged operating point motors (its q current with its speed)") != std::string::npos;
+    }));
+    CHECK(d.recommended_interval_marked(0));
 }
 
 TEST_CASE("on the measured map with generating points, an effect added within the saturation law's stated error is named as a possible stand-in "
@@ -261,8 +301,7 @@ TEST_CASE("on the measured map with generating points, an effect added within th
     // One drive of experiments/pmsm/baldor_generating_study.toml, design mid_large_quiet: the plant
     // is the map and nothing else, and the search adds an encoder offset after saturation (in all 20
     // of the study's drives of this design; the rate is the study's, this is one example).
-    const Measurement data = study_drive("baldor_generating_study.toml", "mid_large_quiet/clean", 1);
-    const Diagnosis d = diagnose(data, parse_model_spec("base"), DiagnosisOptions{});
+    const auto [data, d] = diagnosed_drive("baldor_generating_study.toml", "mid_large_quiet/clean");
     REQUIRE(d.recommended.text() == "base+saturation+encoder_offset");
     REQUIRE(d.law_stand_ins.size() == 1);
     const LawStandIn& s = d.law_stand_ins.front();
@@ -287,4 +326,6 @@ TEST_CASE("on the measured map with generating points, an effect added within th
     CHECK(std::any_of(d.findings.begin(), d.findings.end(), [](const std::string& f) {
         return f.rfind("encoder_offset may stand in for the misfit of a law", 0) == 0 && f.find("saturation (2 % of the flux linkage)") != std::string::npos;
     }));
+    // Its negative direction generates: the power flows both ways, and no caveat says it does not.
+    CHECK(caveat_with(d, "every logged operating point") == nullptr);
 }

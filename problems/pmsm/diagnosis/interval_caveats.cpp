@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -66,6 +67,33 @@ NearestBend nearest_bend(const Measurement& data, const ModelFit& fit) {
     return out;
 }
 
+// The name and stated accuracy of the first of `spec`'s effects whose law states one (Effect::
+// law_accuracy), or an empty name.
+std::pair<std::string, double> law_with_accuracy(const ModelSpec& spec) {
+    for (const auto& term : spec.effects)
+        if (const double accuracy = make_effect(term.name)->law_accuracy(); accuracy > 0.0) return {term.name, accuracy};
+    return {};
+}
+
+// The sign of omega i_q that every segment shows, among those whose speed and q current are both at
+// least a twentieth of the log's largest (a point at standstill or without load shows neither); 0
+// when they differ or fewer than two show one.
+int one_power_flow(const std::vector<SegmentConditions>& segments) {
+    double omega = 0.0, i_q = 0.0;
+    for (const auto& s : segments) {
+        omega = std::max(omega, std::abs(s.omega));
+        i_q = std::max(i_q, std::abs(s.i_q));
+    }
+    int sign = 0, shown = 0;
+    for (const auto& s : segments) {
+        if (std::abs(s.omega) < omega / 20.0 || std::abs(s.i_q) < i_q / 20.0) continue;
+        const int here = s.omega * s.i_q > 0.0 ? 1 : -1;
+        if (shown++ > 0 && here != sign) return 0;
+        sign = here;
+    }
+    return shown >= 2 ? sign : 0;
+}
+
 }  // namespace
 
 std::vector<IntervalCaveat> interval_caveats(const Measurement& data, const Diagnosis& d, const FitOptions& options) {
@@ -104,6 +132,20 @@ std::vector<IntervalCaveat> interval_caveats(const Measurement& data, const Diag
                                        bend.label, bend.current, 1e3 * bend.distance, 1e3 * half_width),
                            {false, true, true, true}});
         }
+    }
+    // A flux law known only to its stated accuracy leaves a misfit omega times a flux error; where
+    // q current changes sign with the speed on every logged point (all motor, or all generate), R_s i
+    // changes with it from point to point and R_s takes part of that misfit. Measured on the Baldor
+    // map (docs/effects.md, "The Baldor study"): R_s 8 % off with every point motoring, within 1.5 %
+    // in ten of twelve designs with the negative direction generating.
+    if (const auto [law, accuracy] = law_with_accuracy(recommended.spec); !law.empty()) {
+        if (const int flow = one_power_flow(d.segments); flow != 0)
+            out.push_back({fmt::format("every logged operating point {} (its q current {} its speed), so R_s i and omega times the {} law's "
+                                       "misfit (stated: {:g} % of the flux linkage) change together from point to point, and R_s takes part "
+                                       "of that misfit; points at the same currents with the opposite flow of power separate them (on a "
+                                       "measured map: R_s 8 % off with motoring points only, within 1.5 % with generating ones, docs/effects.md)",
+                                       flow > 0 ? "motors" : "generates", flow > 0 ? "with" : "against", law, 100.0 * accuracy),
+                           {true, false, false, false}});
     }
     if (!from_path) return out;
 
