@@ -66,7 +66,7 @@ def experiment_jobs():
 def study_jobs(only=None):
     """Each committed study; with `only`, one case of each (a label, or design/label on a study with designs)."""
     jobs = []
-    for name in ("detection_study", "detection_study_averaged", "baldor_study", "baldor_generating_study", "detection_study_5kw", "detection_study_100kw",
+    for name in ("detection_study", "detection_study_generating", "detection_study_averaged", "baldor_study", "baldor_generating_study", "detection_study_5kw", "detection_study_100kw",
                  "detection_study_raw", "detection_study_raw_5kw", "detection_limit_study_servo", "detection_limit_study_5kw",
                  "detection_limit_study_100kw"):
         command = ["study", f"experiments/pmsm/{name}.toml", "--out", "{out}", "--quiet"]
@@ -232,7 +232,8 @@ def main():
     else:
         # Table 3 (GWO, SOA, ISOA on the PMSM) and the demo (every optimizer on classic and BBOB functions).
         jobs = [j for j in experiment_jobs() if j.name in ("pmsm_table3", "demo")]
-        jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_averaged": "current_offset+delay+rs_thermal",
+        jobs += study_jobs({"detection_study": "deadtime+psi_thermal+rs_thermal", "detection_study_generating": "generating/encoder_offset",
+                            "detection_study_averaged": "current_offset+delay+rs_thermal",
                             "baldor_study": "high_small_quiet/clean", "baldor_generating_study": "mid_large_quiet/clean", "detection_study_5kw": "clean",
                             "detection_study_100kw": "clean", "detection_study_raw": "raw/clean", "detection_study_raw_5kw": "raw/clean",
                             "detection_limit_study_servo": "encoder_offset+voltage_offset", "detection_limit_study_5kw": "deadtime+voltage_offset",
