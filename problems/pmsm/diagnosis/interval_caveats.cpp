@@ -2,12 +2,12 @@
 
 #include <cmath>
 #include <limits>
-#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "problems/pmsm/diagnosis/model_checks.hpp"
 #include "problems/pmsm/diagnosis/segments.hpp"
 #include "problems/pmsm/model/steady_state_model.hpp"
 
@@ -65,14 +65,6 @@ NearestBend nearest_bend(const Measurement& data, const ModelFit& fit) {
         }
     }
     return out;
-}
-
-// The name and stated accuracy of the first of `spec`'s effects whose law states one (Effect::
-// law_accuracy), or an empty name.
-std::pair<std::string, double> law_with_accuracy(const ModelSpec& spec) {
-    for (const auto& term : spec.effects)
-        if (const double accuracy = make_effect(term.name)->law_accuracy(); accuracy > 0.0) return {term.name, accuracy};
-    return {};
 }
 
 // The sign of omega i_q that every segment shows, among those whose speed and q current are both at
@@ -138,7 +130,7 @@ std::vector<IntervalCaveat> interval_caveats(const Measurement& data, const Diag
     // changes with it from point to point and R_s takes part of that misfit. Measured on the Baldor
     // map (docs/effects.md, "The Baldor study"): R_s 8 % off with every point motoring, within 1.5 %
     // in ten of twelve designs with the negative direction generating.
-    if (const auto [law, accuracy] = law_with_accuracy(recommended.spec); !law.empty()) {
+    if (const auto [law, accuracy] = stated_law_accuracy(recommended.spec); !law.empty()) {
         if (const int flow = one_power_flow(d.segments); flow != 0)
             out.push_back({fmt::format("every logged operating point {} (its q current {} its speed), so R_s i and omega times the {} law's "
                                        "misfit (stated: {:g} % of the flux linkage) change together from point to point, and R_s takes part "

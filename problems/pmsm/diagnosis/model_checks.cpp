@@ -84,17 +84,20 @@ void check_base(const ModelFit& fit, std::vector<std::string>& problems) {
     }
 }
 
-LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise) {
-    LawAllowance out;
-    if (fit.spec.effects.empty()) return out;
-    double accuracy = 0.0;
+StatedAccuracy stated_law_accuracy(const ModelSpec& spec) {
+    StatedAccuracy out;
     // The accuracy is the law's, not the fit's: an effect made from its name says it, without the
     // pass over the rows that a model of the data would make for its operating scale.
-    for (const auto& term : fit.spec.effects)
-        if (const auto effect = make_effect(term.name); effect->law_accuracy() > accuracy) {
-            accuracy = effect->law_accuracy();
-            out.source = fmt::format("{} ({:g} % of the flux linkage)", effect->name(), 100.0 * accuracy);
-        }
+    for (const auto& term : spec.effects)
+        if (const auto effect = make_effect(term.name); effect->law_accuracy() > out.accuracy) out = {effect->name(), effect->law_accuracy()};
+    return out;
+}
+
+LawAllowance law_allowance(const Measurement& data, const ModelFit& fit, const NoiseEstimate& noise) {
+    LawAllowance out;
+    const StatedAccuracy stated = stated_law_accuracy(fit.spec);
+    const double accuracy = stated.accuracy;
+    if (!stated.effect.empty()) out.source = fmt::format("{} ({:g} % of the flux linkage)", stated.effect, 100.0 * accuracy);
     const double noise_power = static_cast<double>(data.size()) * noise.sigma.squaredNorm();
     if (!(accuracy > 0.0) || !(noise_power > 0.0)) return out;
     // omega psi = u - Rs i in the steady state, whatever else the model holds.

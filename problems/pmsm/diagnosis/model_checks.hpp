@@ -30,6 +30,15 @@ struct HeldOutComparison {
 // `model_folds`: the extended model's leave_one_segment_out (not empty).
 HeldOutComparison compare_held_out(const Measurement& data, const ModelFit& candidate, const std::vector<double>& model_folds);
 
+// The largest accuracy the laws of `spec`'s effects state (Effect::law_accuracy) and the first
+// effect that states it; an empty name and 0 when none states one. Made from the effects' names
+// alone, without a pass over any data.
+struct StatedAccuracy {
+    std::string effect;
+    double accuracy = 0.0;
+};
+StatedAccuracy stated_law_accuracy(const ModelSpec& spec);
+
 // The structure a fit's effect laws may leave by their stated accuracy (Effect::law_accuracy): the
 // largest accuracy among them, squared, times the power of the voltage the flux linkage makes
 // (u - Rs i, every row), relative to the noise power. Zero when no law states an error.
